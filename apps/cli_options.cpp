@@ -1,0 +1,77 @@
+#include "cli_options.hpp"
+
+#include <cmath>
+#include <cstdlib>
+
+namespace csp::cli {
+
+std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::string& name) {
+  std::vector<double> values;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, end - start);
+    char* stop = nullptr;
+    const double value = std::strtod(item.c_str(), &stop);
+    if (item.empty() || stop != item.c_str() + item.size() || !std::isfinite(value))
+      throw UsageError(name + ": `" + item + "` is not a finite number (expected " + std::to_string(count) +
+                       " comma-separated numbers)");
+    values.push_back(value);
+    start = end + 1;
+  }
+  if (values.size() != count)
+    throw UsageError(name + ": expected " + std::to_string(count) + " comma-separated numbers, got " +
+                     std::to_string(values.size()));
+  return values;
+}
+
+Vector7 parse_joint_vector(const std::string& text, const std::string& name) {
+  const auto v = parse_numbers(text, kNumJoints, name);
+  return Eigen::Map<const Vector7>(v.data());
+}
+
+Vector3 parse_vector3(const std::string& text, const std::string& name) {
+  const auto v = parse_numbers(text, 3, name);
+  return Eigen::Map<const Vector3>(v.data());
+}
+
+void ModelArguments::add_to(CLI::App& command) {
+  command.add_option("--robot", robot, "Robot file (configs/robots/*.yaml)")->capture_default_str();
+  command.add_option("--inertia", inertia, "Inertial set of the robot file (default: the file's default)");
+  command.add_option("--friction", friction, "Friction set of the robot file, or `none` (default: the file's)");
+  command.add_option("--limits", limits, "Joint limit set of the robot file (default: the file's)");
+  command.add_option("--ee", end_effector, "End effector: none (arm alone, F_T_EE = identity) or hand")
+      ->capture_default_str();
+  command.add_option("--load-mass", load_mass, "Load on the flange [kg] (libfranka m_load)");
+  command.add_option("--load-com", load_com, "Load centre of mass in the flange frame x,y,z [m] (default 0,0,0)");
+  command.add_option("--load-inertia", load_inertia,
+                     "Load inertia about its CoM Ixx,Ixy,Ixz,Iyy,Iyz,Izz [kg m^2] (default 0)");
+  command.add_option("--gravity", gravity, "Gravity in the base frame gx,gy,gz [m/s^2] (default 0,0,-9.81)");
+}
+
+Model ModelArguments::build() const {
+  ModelOptions options;
+  options.inertia = inertia;
+  options.friction = friction;
+  options.joint_limits = limits;
+  options.end_effector = end_effector;
+  if (!load_mass.empty()) {
+    RigidBodyInertia load;
+    load.mass = parse_numbers(load_mass, 1, "--load-mass")[0];
+    if (load.mass < 0.0) throw UsageError("--load-mass: expected a mass >= 0");
+    if (!load_com.empty()) load.com = parse_vector3(load_com, "--load-com");
+    if (!load_inertia.empty()) {
+      const auto v = parse_numbers(load_inertia, 6, "--load-inertia");
+      load.inertia << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
+      if (load.mass > 0.0 && !is_physical_inertia(load.inertia) && !load.inertia.isZero())
+        throw UsageError("--load-inertia: expected a positive-definite inertia satisfying the triangle inequality");
+    }
+    options.load = load;
+  } else if (!load_com.empty() || !load_inertia.empty()) {
+    throw UsageError("--load-com/--load-inertia: need --load-mass");
+  }
+  if (!gravity.empty()) options.gravity = parse_vector3(gravity, "--gravity");
+  return Model(model_parameters(load_robot_config(robot), options));
+}
+
+}  // namespace csp::cli

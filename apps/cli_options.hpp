@@ -1,0 +1,37 @@
+// Command-line pieces shared by the csp subcommands.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "csp/dynamics/robot_config.hpp"
+
+namespace csp::cli {
+
+// A wrong command-line value: the command prints "csp <command>: <message>" and exits with 2.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Parse "a,b,c" into exactly `count` finite numbers; `name` is the option for the message.
+std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::string& name);
+Vector7 parse_joint_vector(const std::string& text, const std::string& name);
+Vector3 parse_vector3(const std::string& text, const std::string& name);
+
+// --robot, --inertia, --friction, --limits, --ee, --load-*, --gravity: which Model to build.
+struct ModelArguments {
+  std::string robot = std::string(CSP_SOURCE_DIR) + "/configs/robots/panda.yaml";
+  std::string inertia, friction, limits;
+  std::string end_effector = "none";
+  std::string load_mass, load_com, load_inertia, gravity;
+
+  void add_to(CLI::App& command);
+  // Loads the robot file and builds the model; throws ConfigError or UsageError.
+  Model build() const;
+};
+
+}  // namespace csp::cli

@@ -1,0 +1,41 @@
+// csp: the Cobot Simulator Platform command line.
+#include <iostream>
+#include <utility>
+#include <vector>
+
+#include "cli_options.hpp"
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  using namespace csp::cli;
+  CLI::App app{"CSP, the Cobot Simulator Platform: Franka Panda / FR3 dynamics and emulation"};
+  app.require_subcommand(1);
+  std::vector<std::pair<CLI::App*, Command>> commands;
+  auto add = [&](Command (*adder)(CLI::App&)) {
+    Command run = adder(app);
+    commands.emplace_back(app.get_subcommands({}).back(), std::move(run));
+  };
+  add(add_model_command);
+  add(add_workspace_command);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);   // --help on a subcommand, --version
+    std::cerr << "csp: " << e.what() << " (see csp --help)\n";
+    return 2;
+  }
+
+  for (const auto& [command, run] : commands) {
+    if (!command->parsed()) continue;
+    try {
+      return run();
+    } catch (const std::exception& e) {   // UsageError, ConfigError, invalid_argument, I/O errors
+      std::cerr << "csp " << command->get_name() << ": " << e.what() << '\n';
+    }
+    return 2;
+  }
+  return 2;
+}

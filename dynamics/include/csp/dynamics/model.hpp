@@ -1,0 +1,106 @@
+// Model: the immutable parameters of one 7-joint revolute arm described by Craig's modified
+// Denavit-Hartenberg convention (kinematics, inertia, end effector and load, gravity, friction,
+// limits). Data: the preallocated workspace the algorithms write into. Algorithms are free
+// functions taking (const Model&, Data&, ...) and allocate nothing.
+#pragma once
+
+#include <array>
+
+#include <Eigen/Cholesky>
+
+#include "csp/dynamics/friction.hpp"
+#include "csp/dynamics/limits.hpp"
+#include "csp/dynamics/spatial.hpp"
+
+namespace csp {
+
+// One row of the modified-DH table: ^{i-1}T_i = RotX(alpha) TransX(a) RotZ(q_i + theta_offset) TransZ(d).
+struct MdhParameters {
+  double a = 0.0;
+  double d = 0.0;
+  double alpha = 0.0;
+  double theta_offset = 0.0;
+};
+
+// ^{i-1}T_i of one MDH row at joint angle q (Craig eq. 3.6).
+Transform mdh_transform(const MdhParameters& row, double q);
+
+// Everything that defines a Model, as plain values.
+struct ModelParameters {
+  std::array<MdhParameters, kNumJoints> joints{};
+  Transform link7_T_flange;                           // ^7T_F (fixed MDH row)
+  Transform F_T_EE;                                   // flange -> end effector (libfranka F_T_EE)
+  Transform EE_T_K;                                   // end effector -> stiffness frame (EE_T_K)
+  std::array<RigidBodyInertia, kNumJoints> links{};   // link i in MDH frame i
+  RigidBodyInertia end_effector;                      // m_ee, F_x_Cee, I_ee (flange frame)
+  RigidBodyInertia load;                              // m_load, F_x_Cload, I_load (flange frame)
+  Vector3 gravity{0.0, 0.0, -9.81};                   // base frame [m/s^2] (libfranka gravity_earth)
+  FrictionModel friction;
+  JointLimits joint_limits;
+  CartesianLimits cartesian_limits;
+  bool physically_consistent = true;                  // false for fits such as libfranka_fit
+};
+
+class Model {
+ public:
+  explicit Model(const ModelParameters& parameters);
+
+  const ModelParameters& parameters() const { return parameters_; }
+  const MdhParameters& joint(int i) const { return parameters_.joints[i]; }
+  const Vector3& gravity() const { return parameters_.gravity; }
+
+  // Spatial inertia of body i in its link frame, with end effector and load lumped on link 7
+  // (what libfranka's set_load does to the dynamics).
+  const SpatialInertia& body(int i) const { return bodies_[i]; }
+
+  // The end effector and load combined, in the flange frame (libfranka m_total, F_x_Ctotal, I_total).
+  const RigidBodyInertia& total_flange_load() const { return total_flange_load_; }
+
+ private:
+  ModelParameters parameters_;
+  std::array<SpatialInertia, kNumJoints> bodies_{};
+  RigidBodyInertia total_flange_load_;
+};
+
+// Combine two rigid bodies given in one frame into one (mass-weighted CoM, parallel-axis theorem).
+RigidBodyInertia combine(const RigidBodyInertia& a, const RigidBodyInertia& b);
+
+// Model copies with one parameter changed, like libfranka's setLoad / setEE / setK.
+Model with_load(const Model& model, const RigidBodyInertia& load);
+Model with_gravity(const Model& model, const Vector3& gravity);
+
+// Frames a pose or Jacobian can be asked for (libfranka franka::Frame).
+enum class Frame { kJoint1, kJoint2, kJoint3, kJoint4, kJoint5, kJoint6, kJoint7, kFlange, kEndEffector, kStiffness };
+
+struct Data {
+  // Kinematics (forward_kinematics)
+  std::array<Transform, kNumJoints> parent_T_joint{};   // ^{i-1}T_i
+  std::array<Transform, kNumJoints> O_T_joint{};        // ^0T_i
+  Transform O_T_F, O_T_EE, O_T_K;
+  std::array<Vector6, kNumJoints> axis{};               // joint motion subspace S_i at the base origin
+
+  // Dynamics workspaces, base-frame spatial quantities
+  std::array<SpatialInertia, kNumJoints> O_inertia{};   // body i, base frame
+  std::array<SpatialInertia, kNumJoints> composite{};   // bodies i..7, base frame (CRBA)
+  std::array<Vector6, kNumJoints> velocity{};           // v_i
+  std::array<Vector6, kNumJoints> bias_acceleration{};  // c_i = v_i x S_i dq_i
+  std::array<Matrix6, kNumJoints> articulated{};        // I^A_i (ABA)
+  std::array<Vector6, kNumJoints> bias_force{};         // p^A_i (ABA)
+  std::array<Vector6, kNumJoints> U{};
+  std::array<double, kNumJoints> D{};
+  std::array<double, kNumJoints> u{};
+
+  // Outputs
+  Matrix7 mass_matrix = Matrix7::Zero();
+  Matrix7 coriolis_matrix = Matrix7::Zero();
+  Vector7 tau = Vector7::Zero();
+  Vector7 ddq = Vector7::Zero();
+  Eigen::LLT<Matrix7> mass_cholesky{kNumJoints};
+};
+
+// External wrenches on the links: (force; moment) applied BY the environment ON link i,
+// expressed in link frame i about its origin (linear first). Zero for no contact.
+using LinkWrenches = std::array<Vector6, kNumJoints>;
+extern const LinkWrenches kNoLinkWrenches;
+
+}  // namespace csp

@@ -1,0 +1,31 @@
+// Steps shared by the base-frame algorithms (crba, coriolis_matrix, aba). Internal header.
+#pragma once
+
+#include "csp/dynamics/model.hpp"
+
+namespace csp::detail {
+
+// After forward_kinematics: every body's spatial inertia in the base frame.
+inline void update_base_inertias(const Model& model, Data& data) {
+  for (int i = 0; i < kNumJoints; ++i) data.O_inertia[i] = model.body(i).expressed_in(data.O_T_joint[i]);
+}
+
+// After forward_kinematics: body velocities v_i = v_{i-1} + S_i dq_i and the velocity-product
+// accelerations c_i = v_i x S_i dq_i (in base coordinates dS_i/dt = v_i x S_i, Featherstone sec. 2.12).
+inline void update_base_velocities(Data& data, const Vector7& dq) {
+  Vector6 v = Vector6::Zero();
+  for (int i = 0; i < kNumJoints; ++i) {
+    const Vector6 joint_velocity = data.axis[i] * dq[i];
+    v += joint_velocity;
+    data.velocity[i] = v;
+    data.bias_acceleration[i] = cross_motion(v, joint_velocity);
+  }
+}
+
+// A wrench given in link frame i (force; moment about the link origin) expressed in the base frame.
+inline Vector6 wrench_in_base(const Transform& O_T_link, const Vector6& wrench) {
+  const Vector3 force = O_T_link.rotation * wrench.head<3>();
+  return linear_angular(force, O_T_link.rotation * wrench.tail<3>() + O_T_link.translation.cross(force));
+}
+
+}  // namespace csp::detail

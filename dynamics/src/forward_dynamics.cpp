@@ -1,0 +1,56 @@
+#include "base_frame.hpp"
+#include "csp/dynamics/algorithms.hpp"
+
+namespace csp {
+// Articulated-body algorithm in base coordinates (Featherstone Table 7.1 with all quantities in
+// the base frame, so no inertia is ever transformed between links).
+void aba(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& tau,
+         const LinkWrenches& f_ext) {
+  forward_kinematics(model, data, q);
+  detail::update_base_inertias(model, data);
+  detail::update_base_velocities(data, dq);
+
+  // Pass 1: rigid-body inertias and velocity-product forces.
+  for (int i = 0; i < kNumJoints; ++i) {
+    const SpatialInertia& I = data.O_inertia[i];
+    const Vector6& v = data.velocity[i];
+    data.articulated[i] = I.matrix();
+    data.bias_force[i] = cross_force(v, I * v) - detail::wrench_in_base(data.O_T_joint[i], f_ext[i]);
+  }
+
+  // Pass 2 (tip to base): articulated inertias and bias forces.
+  for (int i = kNumJoints - 1; i >= 0; --i) {
+    const Vector6& S = data.axis[i];
+    data.U[i] = data.articulated[i] * S;
+    data.D[i] = S.dot(data.U[i]);
+    data.u[i] = tau[i] - S.dot(data.bias_force[i]);
+    if (i > 0) {
+      const Matrix6 Ia = data.articulated[i] - data.U[i] * data.U[i].transpose() / data.D[i];
+      data.articulated[i - 1] += Ia;
+      data.bias_force[i - 1] += data.bias_force[i] + Ia * data.bias_acceleration[i] + data.U[i] * (data.u[i] / data.D[i]);
+    }
+  }
+
+  // Pass 3 (base to tip): accelerations. The base accelerates upwards against gravity.
+  Vector6 a = linear_angular(-model.gravity(), Vector3::Zero());
+  for (int i = 0; i < kNumJoints; ++i) {
+    a += data.bias_acceleration[i];
+    data.ddq[i] = (data.u[i] - data.U[i].dot(a)) / data.D[i];
+    a += data.axis[i] * data.ddq[i];
+  }
+}
+
+void aba(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& tau) {
+  aba(model, data, q, dq, tau, kNoLinkWrenches);
+}
+
+void forward_dynamics_cholesky(const Model& model, Data& data, const Vector7& q, const Vector7& dq,
+                               const Vector7& tau) {
+  crba(model, data, q);
+  Vector7 bias;
+  rnea(model, data, q, dq, Vector7::Zero(), bias);
+  data.mass_cholesky.compute(data.mass_matrix);
+  data.ddq = data.mass_cholesky.solve(tau - bias);
+}
+
+}  // namespace csp

@@ -1,0 +1,86 @@
+#include "csp/dynamics/model.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace csp {
+
+const LinkWrenches kNoLinkWrenches = [] {
+  LinkWrenches none;
+  for (auto& wrench : none) wrench.setZero();
+  return none;
+}();
+
+Transform mdh_transform(const MdhParameters& row, double q) {
+  const double theta = q + row.theta_offset;
+  const double ct = std::cos(theta), st = std::sin(theta);
+  const double ca = std::cos(row.alpha), sa = std::sin(row.alpha);
+  Transform t;
+  t.rotation << ct, -st, 0.0,   //
+      ca * st, ca * ct, -sa,    //
+      sa * st, sa * ct, ca;
+  t.translation << row.a, -sa * row.d, ca * row.d;
+  return t;
+}
+
+RigidBodyInertia combine(const RigidBodyInertia& a, const RigidBodyInertia& b) {
+  const double mass = a.mass + b.mass;
+  if (mass <= 0.0) return {};
+  const Vector3 com = (a.mass * a.com + b.mass * b.com) / mass;
+  // Parallel-axis theorem: I_C = I_Ci - m_i [r_i]x^2 with r_i the offset of body i from the joint CoM.
+  const Matrix3 ra = skew(a.com - com), rb = skew(b.com - com);
+  return {mass, com, a.inertia - a.mass * ra * ra + b.inertia - b.mass * rb * rb};
+}
+
+namespace {
+void check_flange_body(const RigidBodyInertia& body, const char* what) {
+  if (!std::isfinite(body.mass) || body.mass < 0.0 || !body.com.allFinite() || !body.inertia.allFinite())
+    throw std::invalid_argument(std::string(what) + ": mass must be finite and >= 0, CoM and inertia finite");
+  if (!body.inertia.isApprox(body.inertia.transpose(), 1e-12))
+    throw std::invalid_argument(std::string(what) + ": inertia must be symmetric");
+}
+}  // namespace
+
+Model::Model(const ModelParameters& parameters) : parameters_(parameters) {
+  check_flange_body(parameters_.end_effector, "end effector");
+  check_flange_body(parameters_.load, "load");
+  if (!parameters_.gravity.allFinite()) throw std::invalid_argument("gravity must be finite");
+  total_flange_load_ = combine(parameters_.end_effector, parameters_.load);
+  for (int i = 0; i < kNumJoints; ++i) bodies_[i] = SpatialInertia::from(parameters_.links[i]);
+  // Lump end effector and load on link 7, like libfranka's model does.
+  bodies_[kNumJoints - 1] += SpatialInertia::from(total_flange_load_).expressed_in(parameters_.link7_T_flange);
+}
+
+Model with_load(const Model& model, const RigidBodyInertia& load) {
+  ModelParameters p = model.parameters();
+  p.load = load;
+  return Model(p);
+}
+
+Model with_gravity(const Model& model, const Vector3& gravity) {
+  ModelParameters p = model.parameters();
+  p.gravity = gravity;
+  return Model(p);
+}
+
+Vector7 JointLimits::dq_upper(const Vector7& q) const {
+  if (!position_based_velocity) return dq_max;
+  Vector7 upper;
+  for (int i = 0; i < kNumJoints; ++i) {
+    const double braking = std::sqrt(std::max(0.0, 2.0 * ddq_dec[i] * (q_max[i] - q[i])));
+    upper[i] = std::min(dq_max[i], std::max(0.0, -dq_offset[i] + braking));
+  }
+  return upper;
+}
+
+Vector7 JointLimits::dq_lower(const Vector7& q) const {
+  if (!position_based_velocity) return -dq_max;
+  Vector7 lower;
+  for (int i = 0; i < kNumJoints; ++i) {
+    const double braking = std::sqrt(std::max(0.0, 2.0 * ddq_dec[i] * (q[i] - q_min[i])));
+    lower[i] = std::max(-dq_max[i], std::min(0.0, dq_offset[i] - braking));
+  }
+  return lower;
+}
+
+}  // namespace csp

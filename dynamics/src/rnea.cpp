@@ -1,0 +1,66 @@
+#include "csp/dynamics/algorithms.hpp"
+
+namespace csp {
+namespace {
+
+// Recursive Newton-Euler in link frames (Craig, ch. 6.5; seed paper eqs. 5-9), with the body
+// inertia taken about the link origin so that the CoM terms fold into one spatial product.
+void newton_euler(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq,
+                  const Vector3& gravity, const LinkWrenches& f_ext, Vector7& tau) {
+  const Vector3 z = Vector3::UnitZ();
+  std::array<Vector3, kNumJoints> force, moment;
+
+  // Outward: velocities and accelerations of each link origin, in its own frame.
+  Vector3 w = Vector3::Zero(), dw = Vector3::Zero();
+  Vector3 dv = -gravity;   // a base accelerating upwards stands in for gravity (Craig sec. 6.5)
+  for (int i = 0; i < kNumJoints; ++i) {
+    const Transform& T = data.parent_T_joint[i] = mdh_transform(model.joint(i), q[i]);
+    const Matrix3 Rt = T.rotation.transpose();
+    const Vector3 dv_parent_at_origin = dw.cross(T.translation) + w.cross(w.cross(T.translation)) + dv;
+    const Vector3 w_parent = Rt * w;
+    w = w_parent + dq[i] * z;                                    // eq. 6.45
+    dw = Rt * dw + w_parent.cross(dq[i] * z) + ddq[i] * z;       // eq. 6.46
+    dv = Rt * dv_parent_at_origin;                               // eq. 6.47
+
+    // Net force and moment about the origin (eqs. 6.48-6.50 with h = m c, I_O = I_C - m [c]x^2).
+    const SpatialInertia& I = model.body(i);
+    const Vector3 Iw = I.rotational * w;
+    force[i] = I.mass * dv + dw.cross(I.first_moment) + w.cross(w.cross(I.first_moment)) - f_ext[i].head<3>();
+    moment[i] = I.rotational * dw + w.cross(Iw) + I.first_moment.cross(dv) - f_ext[i].tail<3>();
+  }
+
+  // Inward: each link passes its wrench to its parent (eqs. 6.51-6.53).
+  Vector3 f = Vector3::Zero(), n = Vector3::Zero();
+  for (int i = kNumJoints - 1; i >= 0; --i) {
+    if (i + 1 < kNumJoints) {
+      const Transform& T_child = data.parent_T_joint[i + 1];
+      const Vector3 f_child = T_child.rotation * f;
+      n = T_child.rotation * n + T_child.translation.cross(f_child);
+      f = f_child;
+    }
+    f += force[i];
+    n += moment[i];
+    tau[i] = n.z();
+  }
+}
+
+}  // namespace
+
+void rnea(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq,
+          const LinkWrenches& f_ext, Vector7& tau) {
+  newton_euler(model, data, q, dq, ddq, model.gravity(), f_ext, tau);
+}
+
+void rnea(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq, Vector7& tau) {
+  newton_euler(model, data, q, dq, ddq, model.gravity(), kNoLinkWrenches, tau);
+}
+
+void gravity_torque(const Model& model, Data& data, const Vector7& q, Vector7& g) {
+  newton_euler(model, data, q, Vector7::Zero(), Vector7::Zero(), model.gravity(), kNoLinkWrenches, g);
+}
+
+void coriolis_torque(const Model& model, Data& data, const Vector7& q, const Vector7& dq, Vector7& c) {
+  newton_euler(model, data, q, dq, Vector7::Zero(), Vector3::Zero(), kNoLinkWrenches, c);
+}
+
+}  // namespace csp

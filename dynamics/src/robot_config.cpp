@@ -1,0 +1,325 @@
+#include "csp/dynamics/robot_config.hpp"
+
+#include <cmath>
+#include <initializer_list>
+#include <set>
+
+#include <Eigen/Eigenvalues>
+#include <yaml-cpp/yaml.h>
+
+namespace csp {
+namespace {
+
+// A YAML node together with the file and key path it came from, so that every error can say
+// exactly where it is.
+class Field {
+ public:
+  Field(const YAML::Node& node, std::string file, std::string path)
+      : node_(node), file_(std::move(file)), path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const std::string& expected) const {
+    throw ConfigError(file_ + ": " + (path_.empty() ? "top level" : path_) + ": expected " + expected);
+  }
+
+  bool has(const std::string& key) const { return node_.IsMap() && node_[key]; }
+
+  Field operator[](const std::string& key) const {
+    if (!node_.IsMap()) fail("a mapping");
+    const YAML::Node child = node_[key];
+    const std::string child_path = path_.empty() ? key : path_ + "." + key;
+    if (!child) Field(node_, file_, child_path).fail("this key (missing)");
+    return Field(child, file_, child_path);
+  }
+
+  Field operator[](std::size_t index) const {
+    return Field(node_[index], file_, path_ + "[" + std::to_string(index) + "]");
+  }
+
+  // Reject keys other than the allowed ones (a typo must not become a silent default).
+  void allow_only(std::initializer_list<const char*> keys) const {
+    if (!node_.IsMap()) fail("a mapping");
+    const std::set<std::string> allowed(keys.begin(), keys.end());
+    for (const auto& item : node_) {
+      const auto key = item.first.as<std::string>();
+      if (!allowed.contains(key)) {
+        std::string list;
+        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
+        Field(node_, file_, path_.empty() ? key : path_ + "." + key).fail("no such key (allowed: " + list + ")");
+      }
+    }
+  }
+
+  std::vector<std::string> keys() const {
+    if (!node_.IsMap()) fail("a mapping");
+    std::vector<std::string> out;
+    for (const auto& item : node_) out.push_back(item.first.as<std::string>());
+    return out;
+  }
+
+  std::size_t sequence_size() const {
+    if (!node_.IsSequence()) fail("a list");
+    return node_.size();
+  }
+
+  double number() const {
+    double value = 0.0;
+    if (!node_.IsScalar() || !YAML::convert<double>::decode(node_, value)) fail("a number");
+    if (!std::isfinite(value)) fail("a finite number");
+    return value;
+  }
+
+  bool boolean() const {
+    bool value = false;
+    if (!node_.IsScalar() || !YAML::convert<bool>::decode(node_, value)) fail("true or false");
+    return value;
+  }
+
+  std::string text() const {
+    if (!node_.IsScalar()) fail("a string");
+    return node_.as<std::string>();
+  }
+
+  template <int N>
+  Eigen::Matrix<double, N, 1> vector() const {
+    if (!node_.IsSequence() || node_.size() != N) fail("a list of " + std::to_string(N) + " numbers");
+    Eigen::Matrix<double, N, 1> v;
+    for (int i = 0; i < N; ++i) v[i] = (*this)[static_cast<std::size_t>(i)].number();
+    return v;
+  }
+
+  const std::string& file() const { return file_; }
+
+ private:
+  YAML::Node node_;
+  std::string file_;
+  std::string path_;
+};
+
+Matrix3 inertia_tensor(const Field& field) {
+  const Eigen::Matrix<double, 6, 1> v = field.vector<6>();   // xx, xy, xz, yy, yz, zz
+  Matrix3 I;
+  I << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
+  return I;
+}
+
+RigidBodyInertia rigid_body(const Field& field, bool require_physical) {
+  field.allow_only({"mass", "com", "inertia"});
+  RigidBodyInertia body{field["mass"].number(), field["com"].vector<3>(), inertia_tensor(field["inertia"])};
+  if (body.mass <= 0.0) field["mass"].fail("a positive mass");
+  if (require_physical && !is_physical_inertia(body.inertia))
+    field["inertia"].fail("a positive-definite inertia satisfying the triangle inequality "
+                          "(mark the set `physical: false` if it is knowingly not physical)");
+  return body;
+}
+
+MdhParameters mdh_row(const Field& field, bool with_offset) {
+  if (with_offset) field.allow_only({"a", "d", "alpha", "theta_offset"});
+  else field.allow_only({"a", "d", "alpha"});
+  return {field["a"].number(), field["d"].number(), field["alpha"].number(),
+          with_offset ? field["theta_offset"].number() : 0.0};
+}
+
+Vector7 positive7(const Field& field) {
+  const Vector7 v = field.vector<7>();
+  if ((v.array() <= 0.0).any()) field.fail("7 positive numbers");
+  return v;
+}
+
+JointLimits joint_limit_set(const Field& f) {
+  f.allow_only({"source", "q_min", "q_max", "dq_max", "ddq_max", "dddq_max", "tau_max", "dtau_max",
+                "position_based_velocity"});
+  JointLimits limits;
+  limits.q_min = f["q_min"].vector<7>();
+  limits.q_max = f["q_max"].vector<7>();
+  for (int i = 0; i < kNumJoints; ++i)
+    if (limits.q_min[i] >= limits.q_max[i])
+      f["q_max"].fail("q_min < q_max for every joint (joint " + std::to_string(i + 1) + " is not)");
+  limits.dq_max = positive7(f["dq_max"]);
+  limits.ddq_max = positive7(f["ddq_max"]);
+  limits.dddq_max = positive7(f["dddq_max"]);
+  limits.tau_max = positive7(f["tau_max"]);
+  limits.dtau_max = positive7(f["dtau_max"]);
+  if (f.has("position_based_velocity")) {
+    const Field p = f["position_based_velocity"];
+    p.allow_only({"dq_offset", "ddq_dec"});
+    limits.position_based_velocity = true;
+    limits.dq_offset = p["dq_offset"].vector<7>();
+    if ((limits.dq_offset.array() < 0.0).any()) p["dq_offset"].fail("7 non-negative numbers");
+    limits.ddq_dec = positive7(p["ddq_dec"]);
+  }
+  return limits;
+}
+
+CartesianLimits::Axis cartesian_axis(const Field& f) {
+  f.allow_only({"v_max", "a_max", "j_max"});
+  CartesianLimits::Axis axis{f["v_max"].number(), f["a_max"].number(), f["j_max"].number()};
+  if (axis.v_max <= 0 || axis.a_max <= 0 || axis.j_max <= 0) f.fail("positive v_max, a_max, j_max");
+  return axis;
+}
+
+FrictionModel friction_set(const Field& f) {
+  FrictionModel friction;
+  const std::string type = f["type"].text();
+  if (type == "gaz_sigmoid") {
+    f.allow_only({"source", "type", "phi1", "phi2", "phi3"});
+    friction.type = FrictionModel::Type::kGazSigmoid;
+    friction.phi1 = f["phi1"].vector<7>();
+    friction.phi2 = positive7(f["phi2"]);
+    friction.phi3 = f["phi3"].vector<7>();
+  } else if (type == "linear") {
+    f.allow_only({"source", "type", "viscous", "coulomb", "offset"});
+    friction.type = FrictionModel::Type::kLinear;
+    friction.viscous = f["viscous"].vector<7>();
+    friction.coulomb = f["coulomb"].vector<7>();
+    friction.offset = f["offset"].vector<7>();
+  } else {
+    f["type"].fail("gaz_sigmoid or linear");
+  }
+  return friction;
+}
+
+// A block of named sets: {default: NAME, sets: {NAME: ...}}; `implicit` names need no entry.
+template <typename Parse>
+auto named_sets(const Field& f, std::string& default_name, const std::string& implicit, Parse parse) {
+  f.allow_only({"default", "sets"});
+  std::map<std::string, decltype(parse(f))> sets;
+  const Field entries = f["sets"];
+  for (const auto& name : entries.keys()) {
+    if (name == implicit) entries[name].fail("another name (`" + implicit + "` is built in)");
+    sets.emplace(name, parse(entries[name]));
+  }
+  default_name = f["default"].text();
+  if (default_name != implicit && !sets.contains(default_name)) f["default"].fail("the name of one of the sets");
+  return sets;
+}
+
+Transform rotation_z_translation(double angle, const Vector3& translation) {
+  return {Eigen::AngleAxisd(angle, Vector3::UnitZ()).toRotationMatrix(), translation};
+}
+
+[[noreturn]] void unknown_name(const RobotConfig& config, const std::string& what, const std::string& name,
+                               const std::vector<std::string>& known) {
+  std::string list;
+  for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+  throw ConfigError(config.path + ": unknown " + what + " `" + name + "` (available: " + list + ")");
+}
+
+template <typename Map>
+std::vector<std::string> names_of(const Map& map, const char* implicit = nullptr) {
+  std::vector<std::string> out;
+  if (implicit) out.emplace_back(implicit);
+  for (const auto& [name, value] : map) out.push_back(name);
+  return out;
+}
+
+}  // namespace
+
+bool is_physical_inertia(const Matrix3& I) {
+  if (!I.isApprox(I.transpose(), 1e-12)) return false;
+  const Vector3 moments = Eigen::SelfAdjointEigenSolver<Matrix3>(I, Eigen::EigenvaluesOnly).eigenvalues();
+  if (moments.minCoeff() <= 0.0) return false;
+  const double sum = moments.sum();
+  for (int k = 0; k < 3; ++k)
+    if (moments[k] > sum - moments[k] + 1e-12 * sum) return false;
+  return true;
+}
+
+RobotConfig load_robot_config(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(path + ": cannot open the robot file");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ": not valid YAML: " + e.msg + " (line " + std::to_string(e.mark.line + 1) + ")");
+  }
+  const Field top(root, path, "");
+  top.allow_only({"name", "kinematics", "end_effectors", "limits", "inertia", "friction"});
+
+  RobotConfig config;
+  config.path = path;
+  config.name = top["name"].text();
+
+  const Field kinematics = top["kinematics"];
+  kinematics.allow_only({"source", "mdh", "flange"});
+  const Field mdh = kinematics["mdh"];
+  if (mdh.sequence_size() != kNumJoints) mdh.fail("7 rows, one per joint");
+  for (std::size_t i = 0; i < kNumJoints; ++i) config.mdh[i] = mdh_row(mdh[i], true);
+  config.link7_T_flange = mdh_transform(mdh_row(kinematics["flange"], false), 0.0);
+
+  const Field end_effectors = top["end_effectors"];
+  for (const auto& name : end_effectors.keys()) {
+    const Field ee = end_effectors[name];
+    if (name == "none") ee.fail("another name (`none` is built in)");
+    ee.allow_only({"source", "F_T_EE", "mass", "com", "inertia"});
+    const Field pose = ee["F_T_EE"];
+    pose.allow_only({"rotation_z", "translation"});
+    RigidBodyInertia body{ee["mass"].number(), ee["com"].vector<3>(), inertia_tensor(ee["inertia"])};
+    if (body.mass < 0.0) ee["mass"].fail("a non-negative mass");
+    if (body.mass > 0.0 && !is_physical_inertia(body.inertia)) ee["inertia"].fail("a physical inertia");
+    config.end_effectors.emplace(
+        name, EndEffectorDescription{rotation_z_translation(pose["rotation_z"].number(), pose["translation"].vector<3>()),
+                                     body});
+  }
+
+  const Field limits = top["limits"];
+  limits.allow_only({"joint", "cartesian"});
+  config.joint_limits = named_sets(limits["joint"], config.default_joint_limits, "", joint_limit_set);
+  const Field cartesian = limits["cartesian"];
+  cartesian.allow_only({"source", "translation", "rotation", "elbow"});
+  config.cartesian_limits = {cartesian_axis(cartesian["translation"]), cartesian_axis(cartesian["rotation"]),
+                             cartesian_axis(cartesian["elbow"])};
+
+  config.inertia_sets = named_sets(top["inertia"], config.default_inertia, "", [](const Field& f) {
+    f.allow_only({"source", "physical", "links"});
+    InertiaSet set;
+    set.physical = f["physical"].boolean();
+    const Field links = f["links"];
+    if (links.sequence_size() != kNumJoints) links.fail("7 links");
+    for (std::size_t i = 0; i < kNumJoints; ++i) set.links[i] = rigid_body(links[i], set.physical);
+    return set;
+  });
+
+  config.friction_sets = named_sets(top["friction"], config.default_friction, "none", friction_set);
+  return config;
+}
+
+ModelParameters model_parameters(const RobotConfig& config, const ModelOptions& options) {
+  ModelParameters p;
+  p.joints = config.mdh;
+  p.link7_T_flange = config.link7_T_flange;
+
+  const std::string inertia = options.inertia.empty() ? config.default_inertia : options.inertia;
+  const auto set = config.inertia_sets.find(inertia);
+  if (set == config.inertia_sets.end()) unknown_name(config, "inertial set", inertia, names_of(config.inertia_sets));
+  p.links = set->second.links;
+  p.physically_consistent = set->second.physical;
+
+  const std::string friction = options.friction.empty() ? config.default_friction : options.friction;
+  if (friction != "none") {
+    const auto model = config.friction_sets.find(friction);
+    if (model == config.friction_sets.end())
+      unknown_name(config, "friction set", friction, names_of(config.friction_sets, "none"));
+    p.friction = model->second;
+  }
+
+  const std::string limits = options.joint_limits.empty() ? config.default_joint_limits : options.joint_limits;
+  const auto joint_limits = config.joint_limits.find(limits);
+  if (joint_limits == config.joint_limits.end())
+    unknown_name(config, "joint limit set", limits, names_of(config.joint_limits));
+  p.joint_limits = joint_limits->second;
+  p.cartesian_limits = config.cartesian_limits;
+
+  if (options.end_effector != "none") {
+    const auto ee = config.end_effectors.find(options.end_effector);
+    if (ee == config.end_effectors.end())
+      unknown_name(config, "end effector", options.end_effector, names_of(config.end_effectors, "none"));
+    p.F_T_EE = ee->second.F_T_EE;
+    p.end_effector = ee->second.inertia;
+  }
+  if (options.load) p.load = *options.load;
+  if (options.gravity) p.gravity = *options.gravity;
+  return p;
+}
+
+}  // namespace csp
