@@ -1,0 +1,1 @@
+#include "csp/dynamics/workspace.hpp"

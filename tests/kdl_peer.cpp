@@ -1,0 +1,1 @@
+#include "kdl_peer.hpp"

@@ -1,0 +1,57 @@
+// Test helpers: the shared data file, robot files, seeded random states.
+#pragma once
+
+#include <fstream>
+#include <random>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/robot_config.hpp"
+
+namespace csp::test {
+
+inline std::string robot_file(const std::string& name) {
+  return std::string(CSP_SOURCE_DIR) + "/configs/robots/" + name + ".yaml";
+}
+
+// ../shared/data/franka_models.json, parsed once.
+inline const nlohmann::json& franka_models() {
+  static const nlohmann::json data = [] {
+    std::ifstream in(std::string(CSP_SHARED_DATA_DIR) + "/franka_models.json");
+    if (!in) throw std::runtime_error("cannot open franka_models.json under " CSP_SHARED_DATA_DIR);
+    return nlohmann::json::parse(in);
+  }();
+  return data;
+}
+
+template <int N>
+Eigen::Matrix<double, N, 1> vector_from(const nlohmann::json& values) {
+  if (values.size() != N) throw std::runtime_error("unexpected length in franka_models.json");
+  Eigen::Matrix<double, N, 1> v;
+  for (int i = 0; i < N; ++i) v[i] = values.at(i).get<double>();
+  return v;
+}
+
+inline Model make_model(const std::string& robot, ModelOptions options = {}) {
+  return Model(model_parameters(load_robot_config(robot_file(robot)), options));
+}
+
+// Uniformly random joint positions within the limits; velocities and accelerations of a few rad/s.
+struct RandomStates {
+  explicit RandomStates(unsigned seed) : engine(seed) {}
+  Vector7 q(const JointLimits& limits) {
+    Vector7 v;
+    for (int i = 0; i < kNumJoints; ++i) v[i] = std::uniform_real_distribution<double>(limits.q_min[i], limits.q_max[i])(engine);
+    return v;
+  }
+  Vector7 uniform(double bound) {
+    Vector7 v;
+    for (int i = 0; i < kNumJoints; ++i) v[i] = std::uniform_real_distribution<double>(-bound, bound)(engine);
+    return v;
+  }
+  std::mt19937_64 engine;
+};
+
+}  // namespace csp::test
