@@ -1,4 +1,4 @@
-#include "base_frame.hpp"
+#include "steps.hpp"
 #include "csp/dynamics/algorithms.hpp"
 
 namespace csp {

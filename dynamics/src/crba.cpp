@@ -1,19 +1,31 @@
-#include "base_frame.hpp"
 #include "csp/dynamics/algorithms.hpp"
+#include "steps.hpp"
 
 namespace csp {
 
-// Composite-rigid-body algorithm in base coordinates (Featherstone Table 6.2): with I^c_k the
-// inertia of bodies k..7, M_jk = S_j . (I^c_k S_k) for j <= k.
+// Composite-rigid-body algorithm in link coordinates (Featherstone Table 6.2). The composite
+// inertia of bodies i..7 is accumulated from the tip; F = I^c_i S_i is carried down the chain as
+// a force, and M_ji = S_j . F in each ancestor's frame. Every S_j is the link's z axis, so
+// S_j . F is the moment's z component and I^c_i S_i is read off the inertia directly.
 void crba(const Model& model, Data& data, const Vector7& q) {
-  forward_kinematics(model, data, q);
-  detail::update_base_inertias(model, data);
-  SpatialInertia composite;
-  for (int k = kNumJoints - 1; k >= 0; --k) {
-    composite += data.O_inertia[k];
-    data.composite[k] = composite;
-    const Vector6 F = composite * data.axis[k];
-    for (int j = 0; j <= k; ++j) data.mass_matrix(j, k) = data.mass_matrix(k, j) = data.axis[j].dot(F);
+  detail::update_joint_transforms(model, data, q);
+  SpatialInertia composite = model.body(kNumJoints - 1);
+  for (int i = kNumJoints - 1; i >= 0; --i) {
+    // F = I^c (0; e_z) = (-h x e_z; I_O e_z)
+    const Vector3& h = composite.first_moment;
+    Vector3 force(-h.y(), h.x(), 0.0);
+    Vector3 moment = composite.rotational.col(2);
+    data.mass_matrix(i, i) = moment.z();
+    for (int j = i; j > 0; --j) {
+      const Transform& T = data.parent_T_joint[j];   // force transform from frame j to frame j-1
+      force = T.rotation * force;
+      moment = T.rotation * moment + T.translation.cross(force);
+      data.mass_matrix(j - 1, i) = data.mass_matrix(i, j - 1) = moment.z();
+    }
+    if (i > 0) {
+      composite = composite.expressed_in(data.parent_T_joint[i]);
+      composite += model.body(i - 1);
+    }
   }
 }
 

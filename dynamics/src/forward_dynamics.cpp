@@ -1,4 +1,4 @@
-#include "base_frame.hpp"
+#include "steps.hpp"
 #include "csp/dynamics/algorithms.hpp"
 
 namespace csp {
@@ -25,9 +25,12 @@ void aba(const Model& model, Data& data, const Vector7& q, const Vector7& dq, co
     data.D[i] = S.dot(data.U[i]);
     data.u[i] = tau[i] - S.dot(data.bias_force[i]);
     if (i > 0) {
-      const Matrix6 Ia = data.articulated[i] - data.U[i] * data.U[i].transpose() / data.D[i];
-      data.articulated[i - 1] += Ia;
-      data.bias_force[i - 1] += data.bias_force[i] + Ia * data.bias_acceleration[i] + data.U[i] * (data.u[i] / data.D[i]);
+      // I^a = I^A - U U^T / D and p^a = p^A + I^a c + U u / D, handed to the parent.
+      const Vector6& U = data.U[i];
+      const Vector6& c = data.bias_acceleration[i];
+      data.articulated[i - 1] += data.articulated[i];
+      data.articulated[i - 1].noalias() -= (U / data.D[i]) * U.transpose();
+      data.bias_force[i - 1] += data.bias_force[i] + data.articulated[i] * c + U * ((data.u[i] - U.dot(c)) / data.D[i]);
     }
   }
 

@@ -1,6 +1,5 @@
-#include <cassert>
-
 #include "csp/dynamics/algorithms.hpp"
+#include "steps.hpp"
 
 namespace csp {
 namespace {
@@ -14,9 +13,9 @@ int moving_joints(Frame frame) {
 }  // namespace
 
 void forward_kinematics(const Model& model, Data& data, const Vector7& q) {
+  detail::update_joint_transforms(model, data, q);
   Transform O_T_i;
   for (int i = 0; i < kNumJoints; ++i) {
-    data.parent_T_joint[i] = mdh_transform(model.joint(i), q[i]);
     O_T_i = O_T_i * data.parent_T_joint[i];
     data.O_T_joint[i] = O_T_i;
     // Revolute joint about z_i through o_i: S_i = (o_i x z_i; z_i) at the base origin.

@@ -11,16 +11,14 @@ const LinkWrenches kNoLinkWrenches = [] {
   return none;
 }();
 
+JointGeometry joint_geometry(const MdhParameters& row) {
+  const double ca = std::cos(row.alpha), sa = std::sin(row.alpha);
+  return {ca, sa, row.theta_offset, Vector3(row.a, -sa * row.d, ca * row.d)};
+}
+
 Transform mdh_transform(const MdhParameters& row, double q) {
   const double theta = q + row.theta_offset;
-  const double ct = std::cos(theta), st = std::sin(theta);
-  const double ca = std::cos(row.alpha), sa = std::sin(row.alpha);
-  Transform t;
-  t.rotation << ct, -st, 0.0,   //
-      ca * st, ca * ct, -sa,    //
-      sa * st, sa * ct, ca;
-  t.translation << row.a, -sa * row.d, ca * row.d;
-  return t;
+  return joint_geometry(row).transform(std::cos(theta), std::sin(theta));
 }
 
 RigidBodyInertia combine(const RigidBodyInertia& a, const RigidBodyInertia& b) {
@@ -46,7 +44,10 @@ Model::Model(const ModelParameters& parameters) : parameters_(parameters) {
   check_flange_body(parameters_.load, "load");
   if (!parameters_.gravity.allFinite()) throw std::invalid_argument("gravity must be finite");
   total_flange_load_ = combine(parameters_.end_effector, parameters_.load);
-  for (int i = 0; i < kNumJoints; ++i) bodies_[i] = SpatialInertia::from(parameters_.links[i]);
+  for (int i = 0; i < kNumJoints; ++i) {
+    joints_[i] = joint_geometry(parameters_.joints[i]);
+    bodies_[i] = SpatialInertia::from(parameters_.links[i]);
+  }
   // Lump end effector and load on link 7, like libfranka's model does.
   bodies_[kNumJoints - 1] += SpatialInertia::from(total_flange_load_).expressed_in(parameters_.link7_T_flange);
 }

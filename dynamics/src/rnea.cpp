@@ -1,4 +1,5 @@
 #include "csp/dynamics/algorithms.hpp"
+#include "steps.hpp"
 
 namespace csp {
 namespace {
@@ -10,11 +11,13 @@ void newton_euler(const Model& model, Data& data, const Vector7& q, const Vector
   const Vector3 z = Vector3::UnitZ();
   std::array<Vector3, kNumJoints> force, moment;
 
+  detail::update_joint_transforms(model, data, q);
+
   // Outward: velocities and accelerations of each link origin, in its own frame.
   Vector3 w = Vector3::Zero(), dw = Vector3::Zero();
   Vector3 dv = -gravity;   // a base accelerating upwards stands in for gravity (Craig sec. 6.5)
   for (int i = 0; i < kNumJoints; ++i) {
-    const Transform& T = data.parent_T_joint[i] = mdh_transform(model.joint(i), q[i]);
+    const Transform& T = data.parent_T_joint[i];
     const Matrix3 Rt = T.rotation.transpose();
     const Vector3 dv_parent_at_origin = dw.cross(T.translation) + w.cross(w.cross(T.translation)) + dv;
     const Vector3 w_parent = Rt * w;

@@ -25,6 +25,23 @@ struct MdhParameters {
 // ^{i-1}T_i of one MDH row at joint angle q (Craig eq. 3.6).
 Transform mdh_transform(const MdhParameters& row, double q);
 
+// One MDH row with its constant part evaluated once: ^{i-1}T_i = [RotX(alpha) | origin] RotZ(theta).
+struct JointGeometry {
+  double cos_alpha = 1.0;
+  double sin_alpha = 0.0;
+  double theta_offset = 0.0;
+  Vector3 origin = Vector3::Zero();   // origin of frame i in frame i-1: (a, -sin(alpha) d, cos(alpha) d)
+
+  Transform transform(double cos_theta, double sin_theta) const {
+    Transform t;
+    t.rotation << cos_theta, -sin_theta, 0.0,                                //
+        cos_alpha * sin_theta, cos_alpha * cos_theta, -sin_alpha,           //
+        sin_alpha * sin_theta, sin_alpha * cos_theta, cos_alpha;
+    t.translation = origin;
+    return t;
+  }
+};
+
 // Everything that defines a Model, as plain values.
 struct ModelParameters {
   std::array<MdhParameters, kNumJoints> joints{};
@@ -46,7 +63,7 @@ class Model {
   explicit Model(const ModelParameters& parameters);
 
   const ModelParameters& parameters() const { return parameters_; }
-  const MdhParameters& joint(int i) const { return parameters_.joints[i]; }
+  const JointGeometry& joint(int i) const { return joints_[i]; }
   const Vector3& gravity() const { return parameters_.gravity; }
 
   // Spatial inertia of body i in its link frame, with end effector and load lumped on link 7
@@ -58,6 +75,7 @@ class Model {
 
  private:
   ModelParameters parameters_;
+  std::array<JointGeometry, kNumJoints> joints_{};
   std::array<SpatialInertia, kNumJoints> bodies_{};
   RigidBodyInertia total_flange_load_;
 };
@@ -80,8 +98,7 @@ struct Data {
   std::array<Vector6, kNumJoints> axis{};               // joint motion subspace S_i at the base origin
 
   // Dynamics workspaces, base-frame spatial quantities
-  std::array<SpatialInertia, kNumJoints> O_inertia{};   // body i, base frame
-  std::array<SpatialInertia, kNumJoints> composite{};   // bodies i..7, base frame (CRBA)
+  std::array<SpatialInertia, kNumJoints> O_inertia{};   // body i, base frame (aba, coriolis_matrix)
   std::array<Vector6, kNumJoints> velocity{};           // v_i
   std::array<Vector6, kNumJoints> bias_acceleration{};  // c_i = v_i x S_i dq_i
   std::array<Matrix6, kNumJoints> articulated{};        // I^A_i (ABA)

@@ -115,14 +115,17 @@ struct SpatialInertia {
     return *this;
   }
 
-  // The same body expressed in frame a, given a_T_b with this inertia in frame b.
+  // The same body expressed in frame a, given a_T_b with this inertia in frame b. Rotate, then
+  // shift the origin by p (parallel axis: -[h]x[p]x - [p]x[h]x - m [p]x^2, expanded with
+  // [a]x[b]x = b a^T - (a.b) 1 so that only symmetric outer products remain).
   SpatialInertia expressed_in(const Transform& a_T_b) const {
+    const Matrix3& R = a_T_b.rotation;
     const Vector3& p = a_T_b.translation;
-    const Vector3 h = a_T_b.rotation * first_moment;
-    const Matrix3 rotated = a_T_b.rotation * rotational * a_T_b.rotation.transpose();
-    const Matrix3 P = skew(p), H = skew(h);
-    // Parallel-axis shift of the origin by p (point mass check: I = -m [r+p]x^2).
-    return {mass, h + mass * p, rotated - H * P - P * H - mass * P * P};
+    const Vector3 h = R * first_moment;
+    Matrix3 I = R * rotational * R.transpose();
+    I.diagonal().array() += 2.0 * h.dot(p) + mass * p.squaredNorm();
+    I -= p * h.transpose() + h * p.transpose() + mass * p * p.transpose();
+    return {mass, h + mass * p, I};
   }
 
   Matrix6 matrix() const {
