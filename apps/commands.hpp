@@ -3,8 +3,11 @@
 #pragma once
 
 #include <functional>
+#include <string>
 
 #include <CLI/CLI.hpp>
+
+#include "cli_options.hpp"
 
 namespace csp::cli {
 
@@ -12,5 +15,16 @@ using Command = std::function<int()>;
 
 Command add_model_command(CLI::App& app);
 Command add_workspace_command(CLI::App& app);
+Command add_demo_command(CLI::App& app);
+
+struct WorkspaceArguments {
+  ModelArguments model;
+  long long samples = 1'000'000;
+  long long seed = 1;
+  std::string out = "workspace_out";
+  std::string points;
+  int grid = 200;
+};
+int run_workspace(const WorkspaceArguments& args);
 
 }  // namespace csp::cli

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   };
   add(add_model_command);
   add(add_workspace_command);
+  add(add_demo_command);
 
   try {
     app.parse(argc, argv);

@@ -74,16 +74,98 @@ HeatMapFigure make_figure(const Histogram2D& h, const std::string& measured_labe
 
 }  // namespace
 
+int run_workspace(const WorkspaceArguments& args) {
+  if (args.samples <= 0)
+    throw UsageError("--samples: expected a positive number of samples, got " + std::to_string(args.samples));
+  if (args.seed < 0) throw UsageError("--seed: expected a non-negative integer, got " + std::to_string(args.seed));
+  if (args.grid < 10 || args.grid > kMaxGrid)
+    throw UsageError("--grid: expected 10.." + std::to_string(kMaxGrid) + " cells per axis, got " +
+                     std::to_string(args.grid));
+  const Model model = args.model.build();
+
+  // Check the outputs before sampling, so a bad path fails at once.
+  namespace fs = std::filesystem;
+  const fs::path dir(args.out);
+  std::error_code error;
+  fs::create_directories(dir, error);
+  if (error || !fs::is_directory(dir))
+    throw std::runtime_error("cannot create output directory " + dir.string() +
+                             (error ? ": " + error.message() : ": not a directory"));
+  const std::string side_path = (dir / "workspace_side.svg").string(), top_path = (dir / "workspace_top.svg").string();
+  for (const std::string& path : {side_path, top_path})
+    if (!std::ofstream(path, std::ios::app)) throw std::runtime_error("cannot write " + path);
+  std::ofstream points;
+  if (!args.points.empty()) {
+    points.open(args.points, std::ios::binary);
+    if (!points) throw std::runtime_error("cannot write " + args.points);
+    std::cerr << format("csp workspace: writing %lld points to %s (about %.0f MB)\n", args.samples,
+                        args.points.c_str(), 60e-6 * static_cast<double>(args.samples));
+    points << "flange_x,flange_y,flange_z,ee_x,ee_y,ee_z\n";
+  }
+
+  WorkspaceOptions options;
+  options.samples = args.samples;
+  options.seed = static_cast<std::uint64_t>(args.seed);
+  options.grid = args.grid;
+  options.frame = Frame::kEndEffector;   // = the flange when --ee none
+  WorkspaceCallback on_point;
+  if (points.is_open())
+    on_point = [&points](const WorkspacePoint& p) { write_point_row(points, p.flange, p.end_effector); };
+
+  const auto start = std::chrono::steady_clock::now();
+  const WorkspaceResult result = sample_workspace(model, options, on_point);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (points.is_open()) {
+    points.close();
+    if (!points) throw std::runtime_error("cannot write " + args.points);
+  }
+
+  // Figures of the end-effector positions (the flange itself when there is no end effector).
+  const bool flange_only = model.parameters().F_T_EE.translation.isZero() && model.parameters().F_T_EE.rotation.isIdentity();
+  const std::string robot = fs::path(args.model.robot).stem().string();
+  const std::string what = flange_only ? "flange" : "end effector (" + args.model.end_effector + ")";
+  const std::string subtitle = format("%lld uniform joint configurations, seed %lld; circles centred on the shoulder "
+                                      "(joint-2 origin)", args.samples, args.seed);
+  const ReachStatistics& shown = flange_only ? result.flange : result.end_effector;
+  HeatMapFigure side = make_figure(result.side, "sampled max reach from the shoulder", shown.max_reach, subtitle);
+  side.title = robot + " workspace, side view: " + what + " position";
+  side.x_label = "signed horizontal radius sign(x)·√(x² + y²) [m]";
+  side.y_label = "z [m]";
+  for (auto& c : side.circles) c.cy = result.shoulder.z();
+  side.markers = {{0.0, 0.0, "base", FigureMarker::Shape::kBase},
+                  {0.0, result.shoulder.z(), "shoulder (joint 2)", FigureMarker::Shape::kPoint}};
+  side.lines = {{0.0, "base plane z = 0"}};
+  HeatMapFigure top = make_figure(result.top, "sampled max horizontal radius", shown.max_radius, subtitle);
+  top.title = robot + " workspace, top view: " + what + " position";
+  top.x_label = "x [m]";
+  top.y_label = "y [m]";
+  for (auto& c : top.circles) c.cx = result.shoulder.x(), c.cy = result.shoulder.y();
+  top.markers = {{0.0, 0.0, "base / shoulder", FigureMarker::Shape::kBase}};
+  write_svg(side_path, side);
+  write_svg(top_path, top);
+
+  std::cout << format("csp workspace: %s, end effector %s, %lld samples, seed %lld\n", robot.c_str(),
+                      args.model.end_effector.c_str(), args.samples, args.seed)
+            << "sampling: each q_i uniform in [q_min_i, q_max_i] of the joint limits, independent, mt19937_64;\n"
+            << "          positions by forward kinematics (MDH chain, flange = O_T_F, end effector = O_T_EE)\n"
+            << format("reach = Euclidean distance from the shoulder, the joint-2 origin (%.3f, %.3f, %.3f) m,\n",
+                      result.shoulder.x(), result.shoulder.y(), result.shoulder.z())
+            << "        compared with Franka's published maximum reach of 855 mm; a sampled maximum\n"
+            << "        approaches the true maximum from below as the number of samples grows\n";
+  print_statistics("flange", result.flange, result.shoulder, true);
+  if (!flange_only) print_statistics("end effector", result.end_effector, result.shoulder, false);
+  std::cout << format("density grids: %d x %d cells of %.1f mm, %llu samples outside\n", result.side.nx, result.side.ny,
+                      1000 * result.side.cell_width(),
+                      static_cast<unsigned long long>(result.side.outside + result.top.outside))
+            << "figures: " << side_path << ", " << top_path << '\n'
+            << format("time: %.3f s sampling (%.0f ns per sample)%s\n", seconds,
+                      1e9 * seconds / static_cast<double>(args.samples),
+                      args.points.empty() ? "" : ", including the CSV");
+  return 0;
+}
+
 Command add_workspace_command(CLI::App& app) {
-  struct Arguments {
-    ModelArguments model;
-    long long samples = 1'000'000;
-    long long seed = 1;
-    std::string out = "workspace_out";
-    std::string points;
-    int grid = 200;
-  };
-  auto args = std::make_shared<Arguments>();
+  auto args = std::make_shared<WorkspaceArguments>();
   CLI::App* command = app.add_subcommand(
       "workspace", "Sample the reachable workspace (uniform joint configurations), write side/top density SVGs, print reach statistics");
   args->model.add_to(*command);
@@ -99,95 +181,7 @@ Command add_workspace_command(CLI::App& app) {
   command->add_option("--grid", args->grid, "Histogram cells per axis (10.." + std::to_string(kMaxGrid) + ")")
       ->capture_default_str();
 
-  return [args] {
-    if (args->samples <= 0)
-      throw UsageError("--samples: expected a positive number of samples, got " + std::to_string(args->samples));
-    if (args->seed < 0) throw UsageError("--seed: expected a non-negative integer, got " + std::to_string(args->seed));
-    if (args->grid < 10 || args->grid > kMaxGrid)
-      throw UsageError("--grid: expected 10.." + std::to_string(kMaxGrid) + " cells per axis, got " +
-                       std::to_string(args->grid));
-    const Model model = args->model.build();
-
-    // Check the outputs before sampling, so a bad path fails at once.
-    namespace fs = std::filesystem;
-    const fs::path dir(args->out);
-    std::error_code error;
-    fs::create_directories(dir, error);
-    if (error || !fs::is_directory(dir))
-      throw std::runtime_error("cannot create output directory " + dir.string() +
-                               (error ? ": " + error.message() : ": not a directory"));
-    const std::string side_path = (dir / "workspace_side.svg").string(), top_path = (dir / "workspace_top.svg").string();
-    for (const std::string& path : {side_path, top_path})
-      if (!std::ofstream(path, std::ios::app)) throw std::runtime_error("cannot write " + path);
-    std::ofstream points;
-    if (!args->points.empty()) {
-      points.open(args->points, std::ios::binary);
-      if (!points) throw std::runtime_error("cannot write " + args->points);
-      std::cerr << format("csp workspace: writing %lld points to %s (about %.0f MB)\n", args->samples,
-                          args->points.c_str(), 60e-6 * static_cast<double>(args->samples));
-      points << "flange_x,flange_y,flange_z,ee_x,ee_y,ee_z\n";
-    }
-
-    WorkspaceOptions options;
-    options.samples = args->samples;
-    options.seed = static_cast<std::uint64_t>(args->seed);
-    options.grid = args->grid;
-    options.frame = Frame::kEndEffector;   // = the flange when --ee none
-    WorkspaceCallback on_point;
-    if (points.is_open())
-      on_point = [&points](const WorkspacePoint& p) { write_point_row(points, p.flange, p.end_effector); };
-
-    const auto start = std::chrono::steady_clock::now();
-    const WorkspaceResult result = sample_workspace(model, options, on_point);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (points.is_open()) {
-      points.close();
-      if (!points) throw std::runtime_error("cannot write " + args->points);
-    }
-
-    // Figures of the end-effector positions (the flange itself when there is no end effector).
-    const bool flange_only = model.parameters().F_T_EE.translation.isZero() && model.parameters().F_T_EE.rotation.isIdentity();
-    const std::string robot = fs::path(args->model.robot).stem().string();
-    const std::string what = flange_only ? "flange" : "end effector (" + args->model.end_effector + ")";
-    const std::string subtitle = format("%lld uniform joint configurations, seed %lld; circles centred on the shoulder "
-                                        "(joint-2 origin)", args->samples, args->seed);
-    const ReachStatistics& shown = flange_only ? result.flange : result.end_effector;
-    HeatMapFigure side = make_figure(result.side, "sampled max reach from the shoulder", shown.max_reach, subtitle);
-    side.title = robot + " workspace, side view: " + what + " position";
-    side.x_label = "signed horizontal radius sign(x)·√(x² + y²) [m]";
-    side.y_label = "z [m]";
-    for (auto& c : side.circles) c.cy = result.shoulder.z();
-    side.markers = {{0.0, 0.0, "base", FigureMarker::Shape::kBase},
-                    {0.0, result.shoulder.z(), "shoulder (joint 2)", FigureMarker::Shape::kPoint}};
-    side.lines = {{0.0, "base plane z = 0"}};
-    HeatMapFigure top = make_figure(result.top, "sampled max horizontal radius", shown.max_radius, subtitle);
-    top.title = robot + " workspace, top view: " + what + " position";
-    top.x_label = "x [m]";
-    top.y_label = "y [m]";
-    for (auto& c : top.circles) c.cx = result.shoulder.x(), c.cy = result.shoulder.y();
-    top.markers = {{0.0, 0.0, "base / shoulder", FigureMarker::Shape::kBase}};
-    write_svg(side_path, side);
-    write_svg(top_path, top);
-
-    std::cout << format("csp workspace: %s, end effector %s, %lld samples, seed %lld\n", robot.c_str(),
-                        args->model.end_effector.c_str(), args->samples, args->seed)
-              << "sampling: each q_i uniform in [q_min_i, q_max_i] of the joint limits, independent, mt19937_64;\n"
-              << "          positions by forward kinematics (MDH chain, flange = O_T_F, end effector = O_T_EE)\n"
-              << format("reach = Euclidean distance from the shoulder, the joint-2 origin (%.3f, %.3f, %.3f) m,\n",
-                        result.shoulder.x(), result.shoulder.y(), result.shoulder.z())
-              << "        compared with Franka's published maximum reach of 855 mm; a sampled maximum\n"
-              << "        approaches the true maximum from below as the number of samples grows\n";
-    print_statistics("flange", result.flange, result.shoulder, true);
-    if (!flange_only) print_statistics("end effector", result.end_effector, result.shoulder, false);
-    std::cout << format("density grids: %d x %d cells of %.1f mm, %llu samples outside\n", result.side.nx, result.side.ny,
-                        1000 * result.side.cell_width(),
-                        static_cast<unsigned long long>(result.side.outside + result.top.outside))
-              << "figures: " << side_path << ", " << top_path << '\n'
-              << format("time: %.3f s sampling (%.0f ns per sample)%s\n", seconds,
-                        1e9 * seconds / static_cast<double>(args->samples),
-                        args->points.empty() ? "" : ", including the CSV");
-    return 0;
-  };
+  return [args] { return run_workspace(*args); };
 }
 
 }  // namespace csp::cli
