@@ -1,5 +1,6 @@
 // csp: the Cobot Simulator Platform command line.
 #include <iostream>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -18,6 +19,18 @@ int main(int argc, char** argv) {
   add(add_model_command);
   add(add_workspace_command);
   add(add_demo_command);
+
+  // CLI11 would report an unknown command as a missing one; name it instead.
+  std::string known;
+  bool is_known = false;
+  for (const auto& [command, run] : commands) {
+    known += (known.empty() ? "" : ", ") + command->get_name();
+    is_known = is_known || (argc > 1 && command->get_name() == argv[1]);
+  }
+  if (argc > 1 && argv[1][0] != '-' && !is_known) {
+    std::cerr << "csp: unknown command `" << argv[1] << "` (commands: " << known << ")\n";
+    return 2;
+  }
 
   try {
     app.parse(argc, argv);

@@ -1,6 +1,7 @@
 #include "csp/dynamics/robot_config.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <initializer_list>
 #include <set>
 
@@ -225,6 +226,7 @@ bool is_physical_inertia(const Matrix3& I) {
 }
 
 RobotConfig load_robot_config(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw ConfigError(path + ": cannot open the robot file (missing, or not a regular file)");
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -232,6 +234,8 @@ RobotConfig load_robot_config(const std::string& path) {
     throw ConfigError(path + ": cannot open the robot file");
   } catch (const YAML::Exception& e) {
     throw ConfigError(path + ": not valid YAML: " + e.msg + " (line " + std::to_string(e.mark.line + 1) + ")");
+  } catch (const std::exception& e) {   // e.g. an I/O error while reading
+    throw ConfigError(path + ": cannot read the robot file: " + e.what());
   }
   const Field top(root, path, "");
   top.allow_only({"name", "kinematics", "end_effectors", "limits", "inertia", "friction"});
