@@ -8,7 +8,7 @@ namespace csp {
 // a force, and M_ji = S_j . F in each ancestor's frame. Every S_j is the link's z axis, so
 // S_j . F is the moment's z component and I^c_i S_i is read off the inertia directly.
 void crba(const Model& model, Data& data, const Vector7& q) {
-  detail::update_joint_transforms(model, data, q);
+  detail::update_joint_angles(model, data, q);
   SpatialInertia composite = model.body(kNumJoints - 1);
   for (int i = kNumJoints - 1; i >= 0; --i) {
     // F = I^c (0; e_z) = (-h x e_z; I_O e_z)
@@ -16,14 +16,19 @@ void crba(const Model& model, Data& data, const Vector7& q) {
     Vector3 force(-h.y(), h.x(), 0.0);
     Vector3 moment = composite.rotational.col(2);
     data.mass_matrix(i, i) = moment.z();
-    for (int j = i; j > 0; --j) {
-      const Transform& T = data.parent_T_joint[j];   // force transform from frame j to frame j-1
-      force = T.rotation * force;
-      moment = T.rotation * moment + T.translation.cross(force);
+    for (int j = i; j > 0; --j) {   // force transform from frame j to frame j-1
+      const JointGeometry& joint = model.joint(j);
+      const double c = data.cos_theta[j], s = data.sin_theta[j];
+      force = joint.rotate(c, s, force);
+      moment = joint.rotate(c, s, moment) + joint.origin.cross(force);
       data.mass_matrix(j - 1, i) = data.mass_matrix(i, j - 1) = moment.z();
     }
-    if (i > 0) {
-      composite = composite.expressed_in(data.parent_T_joint[i]);
+    if (i > 0) {   // I^c_{i-1} = I_{i-1} + (I^c_i expressed in frame i-1)
+      const JointGeometry& joint = model.joint(i);
+      const double c = data.cos_theta[i], s = data.sin_theta[i];
+      composite = SpatialInertia{composite.mass, joint.rotate(c, s, composite.first_moment),
+                                 joint.rotate_symmetric(c, s, composite.rotational)}
+                      .shifted(joint.origin);
       composite += model.body(i - 1);
     }
   }

@@ -9,14 +9,14 @@
 namespace csp::detail {
 
 void joint_sin_cos(const Vector7& theta, Vector7& sin_theta, Vector7& cos_theta) {
-  // Padded to 8 lanes: two full 4-wide calls instead of 4 + 2 + a scalar remainder.
+  // Padded to 8 lanes: two full 4-wide calls instead of 4 + 2 + a scalar remainder. Two loops,
+  // because GCC fuses sin and cos of one argument into a scalar sincos call, which has no vector form.
   alignas(64) double in[8] = {}, s[8], c[8];
   for (int i = 0; i < kNumJoints; ++i) in[i] = theta[i];
 #pragma omp simd
-  for (int i = 0; i < 8; ++i) {
-    s[i] = std::sin(in[i]);
-    c[i] = std::cos(in[i]);
-  }
+  for (int i = 0; i < 8; ++i) s[i] = std::sin(in[i]);
+#pragma omp simd
+  for (int i = 0; i < 8; ++i) c[i] = std::cos(in[i]);
   for (int i = 0; i < kNumJoints; ++i) {
     sin_theta[i] = s[i];
     cos_theta[i] = c[i];

@@ -11,19 +11,20 @@ void newton_euler(const Model& model, Data& data, const Vector7& q, const Vector
   const Vector3 z = Vector3::UnitZ();
   std::array<Vector3, kNumJoints> force, moment;
 
-  detail::update_joint_transforms(model, data, q);
+  detail::update_joint_angles(model, data, q);
 
   // Outward: velocities and accelerations of each link origin, in its own frame.
   Vector3 w = Vector3::Zero(), dw = Vector3::Zero();
   Vector3 dv = -gravity;   // a base accelerating upwards stands in for gravity (Craig sec. 6.5)
   for (int i = 0; i < kNumJoints; ++i) {
-    const Transform& T = data.parent_T_joint[i];
-    const Matrix3 Rt = T.rotation.transpose();
-    const Vector3 dv_parent_at_origin = dw.cross(T.translation) + w.cross(w.cross(T.translation)) + dv;
-    const Vector3 w_parent = Rt * w;
-    w = w_parent + dq[i] * z;                                    // eq. 6.45
-    dw = Rt * dw + w_parent.cross(dq[i] * z) + ddq[i] * z;       // eq. 6.46
-    dv = Rt * dv_parent_at_origin;                               // eq. 6.47
+    const JointGeometry& joint = model.joint(i);
+    const double c = data.cos_theta[i], s = data.sin_theta[i];
+    const Vector3& p = joint.origin;
+    const Vector3 dv_parent_at_origin = dw.cross(p) + w.cross(w.cross(p)) + dv;
+    const Vector3 w_parent = joint.rotate_back(c, s, w);
+    w = w_parent + dq[i] * z;                                                // eq. 6.45
+    dw = joint.rotate_back(c, s, dw) + w_parent.cross(dq[i] * z) + ddq[i] * z;  // eq. 6.46
+    dv = joint.rotate_back(c, s, dv_parent_at_origin);                        // eq. 6.47
 
     // Net force and moment about the origin (eqs. 6.48-6.50 with h = m c, I_O = I_C - m [c]x^2).
     const SpatialInertia& I = model.body(i);
@@ -36,9 +37,10 @@ void newton_euler(const Model& model, Data& data, const Vector7& q, const Vector
   Vector3 f = Vector3::Zero(), n = Vector3::Zero();
   for (int i = kNumJoints - 1; i >= 0; --i) {
     if (i + 1 < kNumJoints) {
-      const Transform& T_child = data.parent_T_joint[i + 1];
-      const Vector3 f_child = T_child.rotation * f;
-      n = T_child.rotation * n + T_child.translation.cross(f_child);
+      const JointGeometry& child = model.joint(i + 1);
+      const double c = data.cos_theta[i + 1], s = data.sin_theta[i + 1];
+      const Vector3 f_child = child.rotate(c, s, f);
+      n = child.rotate(c, s, n) + child.origin.cross(f_child);
       f = f_child;
     }
     f += force[i];

@@ -8,12 +8,11 @@ namespace csp::detail {
 // sin and cos of seven angles at once (vectorised, src/joint_trig.cpp).
 void joint_sin_cos(const Vector7& theta, Vector7& sin_theta, Vector7& cos_theta);
 
-// data.parent_T_joint = ^{i-1}T_i(q_i) for every joint.
-inline void update_joint_transforms(const Model& model, Data& data, const Vector7& q) {
-  Vector7 theta, sin_theta, cos_theta;
+// data.cos_theta, data.sin_theta of theta_i = q_i + theta_offset_i.
+inline void update_joint_angles(const Model& model, Data& data, const Vector7& q) {
+  Vector7 theta;
   for (int i = 0; i < kNumJoints; ++i) theta[i] = q[i] + model.joint(i).theta_offset;
-  joint_sin_cos(theta, sin_theta, cos_theta);
-  for (int i = 0; i < kNumJoints; ++i) data.parent_T_joint[i] = model.joint(i).transform(cos_theta[i], sin_theta[i]);
+  joint_sin_cos(theta, data.sin_theta, data.cos_theta);
 }
 
 // After forward_kinematics: every body's spatial inertia in the base frame.

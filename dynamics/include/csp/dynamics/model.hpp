@@ -26,6 +26,9 @@ struct MdhParameters {
 Transform mdh_transform(const MdhParameters& row, double q);
 
 // One MDH row with its constant part evaluated once: ^{i-1}T_i = [RotX(alpha) | origin] RotZ(theta).
+// The rotation RotX(alpha) RotZ(theta) is applied as two plane rotations (8 multiplications for a
+// vector, about 30 for a symmetric matrix) instead of a full 3x3 product: the recursions spend most
+// of their time there.
 struct JointGeometry {
   double cos_alpha = 1.0;
   double sin_alpha = 0.0;
@@ -39,6 +42,40 @@ struct JointGeometry {
         sin_alpha * sin_theta, sin_alpha * cos_theta, cos_alpha;
     t.translation = origin;
     return t;
+  }
+
+  // ^{i-1}R_i v: a vector of frame i in frame i-1 (RotZ(theta), then RotX(alpha)).
+  Vector3 rotate(double cos_theta, double sin_theta, const Vector3& v) const {
+    const double x = cos_theta * v.x() - sin_theta * v.y();
+    const double y = sin_theta * v.x() + cos_theta * v.y();
+    return {x, cos_alpha * y - sin_alpha * v.z(), sin_alpha * y + cos_alpha * v.z()};
+  }
+
+  // ^{i-1}R_i^T v: a vector of frame i-1 in frame i.
+  Vector3 rotate_back(double cos_theta, double sin_theta, const Vector3& v) const {
+    const double y = cos_alpha * v.y() + sin_alpha * v.z();
+    const double z = -sin_alpha * v.y() + cos_alpha * v.z();
+    return {cos_theta * v.x() + sin_theta * y, -sin_theta * v.x() + cos_theta * y, z};
+  }
+
+  // R I R^T for a symmetric I given in frame i, expressed in frame i-1.
+  Matrix3 rotate_symmetric(double cos_theta, double sin_theta, const Matrix3& I) const {
+    Matrix3 out = I;
+    rotate_in_plane(out, 0, 1, cos_theta, sin_theta);   // RotZ(theta): axes x, y
+    rotate_in_plane(out, 1, 2, cos_alpha, sin_alpha);   // RotX(alpha): axes y, z
+    return out;
+  }
+
+ private:
+  // I <- G I G^T, G the rotation by (c, s) in the plane of axes i, j (new_i = c i - s j, new_j = s i + c j).
+  static void rotate_in_plane(Matrix3& I, int i, int j, double c, double s) {
+    const int k = 3 - i - j;
+    const double ii = I(i, i), jj = I(j, j), ij = I(i, j), ik = I(i, k), jk = I(j, k);
+    I(i, i) = c * c * ii - 2.0 * c * s * ij + s * s * jj;
+    I(j, j) = s * s * ii + 2.0 * c * s * ij + c * c * jj;
+    I(i, j) = I(j, i) = c * s * (ii - jj) + (c * c - s * s) * ij;
+    I(i, k) = I(k, i) = c * ik - s * jk;
+    I(j, k) = I(k, j) = s * ik + c * jk;
   }
 };
 
@@ -91,8 +128,10 @@ Model with_gravity(const Model& model, const Vector3& gravity);
 enum class Frame { kJoint1, kJoint2, kJoint3, kJoint4, kJoint5, kJoint6, kJoint7, kFlange, kEndEffector, kStiffness };
 
 struct Data {
+  // Joint angles theta_i = q_i + theta_offset_i (every algorithm)
+  Vector7 cos_theta = Vector7::Ones(), sin_theta = Vector7::Zero();
+
   // Kinematics (forward_kinematics)
-  std::array<Transform, kNumJoints> parent_T_joint{};   // ^{i-1}T_i
   std::array<Transform, kNumJoints> O_T_joint{};        // ^0T_i
   Transform O_T_F, O_T_EE, O_T_K;
   std::array<Vector6, kNumJoints> axis{};               // joint motion subspace S_i at the base origin

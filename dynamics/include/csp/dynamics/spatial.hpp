@@ -115,14 +115,18 @@ struct SpatialInertia {
     return *this;
   }
 
-  // The same body expressed in frame a, given a_T_b with this inertia in frame b. Rotate, then
-  // shift the origin by p (parallel axis: -[h]x[p]x - [p]x[h]x - m [p]x^2, expanded with
-  // [a]x[b]x = b a^T - (a.b) 1 so that only symmetric outer products remain).
+  // The same body expressed in frame a, given a_T_b with this inertia in frame b.
   SpatialInertia expressed_in(const Transform& a_T_b) const {
     const Matrix3& R = a_T_b.rotation;
-    const Vector3& p = a_T_b.translation;
-    const Vector3 h = R * first_moment;
-    Matrix3 I = R * rotational * R.transpose();
+    return SpatialInertia{mass, R * first_moment, R * rotational * R.transpose()}.shifted(a_T_b.translation);
+  }
+
+  // The same body about an origin moved to -p, i.e. in a frame whose origin sees this one at p
+  // (axes unchanged). Parallel axis: -[h]x[p]x - [p]x[h]x - m [p]x^2, expanded with
+  // [a]x[b]x = b a^T - (a.b) 1 so that only symmetric outer products remain.
+  SpatialInertia shifted(const Vector3& p) const {
+    const Vector3& h = first_moment;
+    Matrix3 I = rotational;
     I.diagonal().array() += 2.0 * h.dot(p) + mass * p.squaredNorm();
     I -= p * h.transpose() + h * p.transpose() + mass * p * p.transpose();
     return {mass, h + mass * p, I};
