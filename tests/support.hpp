@@ -1,11 +1,14 @@
 // Test helpers: the shared data file, robot files, seeded random states.
 #pragma once
 
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
 
+#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <unistd.h>
 
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/dynamics/robot_config.hpp"
@@ -53,5 +56,34 @@ struct RandomStates {
   }
   std::mt19937_64 engine;
 };
+
+// Max |actual - expected| <= tolerance, with the worst entry in the failure message.
+template <typename A, typename B>
+inline ::testing::AssertionResult near(const Eigen::MatrixBase<A>& actual, const Eigen::MatrixBase<B>& expected,
+                                double tolerance) {
+  if (actual.rows() != expected.rows() || actual.cols() != expected.cols())
+    return ::testing::AssertionFailure() << "size mismatch";
+  Eigen::Index r = 0, c = 0;
+  const double worst = (actual - expected).cwiseAbs().maxCoeff(&r, &c);
+  if (worst <= tolerance) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "max |difference| " << worst << " > " << tolerance << " at (" << r << ", "
+                                       << c << "): actual " << actual(r, c) << ", expected " << expected(r, c)
+                                       << "\nactual:\n" << actual << "\nexpected:\n" << expected;
+}
+
+// A directory for this process's generated files, removed when the test program ends.
+inline const std::filesystem::path& temp_dir() {
+  struct Directory {
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("csp_test_" + std::to_string(::getpid()));
+    Directory() { std::filesystem::create_directories(path); }
+    ~Directory() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  };
+  static const Directory directory;
+  return directory.path;
+}
 
 }  // namespace csp::test

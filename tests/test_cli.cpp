@@ -39,21 +39,6 @@ std::string shell_quote(const std::string& arg) {
   return quoted + "'";
 }
 
-// A directory for this process's generated files, removed when the test program ends.
-const std::filesystem::path& temp_dir() {
-  struct Directory {
-    std::filesystem::path path =
-        std::filesystem::temp_directory_path() / ("csp_test_cli_" + std::to_string(::getpid()));
-    Directory() { std::filesystem::create_directories(path); }
-    ~Directory() {
-      std::error_code ignored;
-      std::filesystem::remove_all(path, ignored);
-    }
-  };
-  static const Directory directory;
-  return directory.path;
-}
-
 std::string read_text(const std::string& path) {
   std::ifstream in(path);
   std::stringstream text;
@@ -147,19 +132,6 @@ ModelOutput model(std::vector<std::string> args) {
   }
   EXPECT_EQ(sizes, kContract) << describe(args);
   return output;
-}
-
-// Max |actual - expected| <= tolerance, with the worst entry in the failure message.
-template <typename A, typename B>
-::testing::AssertionResult near(const Eigen::MatrixBase<A>& actual, const Eigen::MatrixBase<B>& expected,
-                                double tolerance) {
-  if (actual.rows() != expected.rows() || actual.cols() != expected.cols())
-    return ::testing::AssertionFailure() << "size mismatch";
-  Eigen::Index r = 0, c = 0;
-  const double worst = (actual - expected).cwiseAbs().maxCoeff(&r, &c);
-  if (worst <= tolerance) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "max |difference| " << worst << " > " << tolerance << " at (" << r << ", "
-                                       << c << "): actual " << actual(r, c) << ", expected " << expected(r, c);
 }
 
 const json& dump() { return franka_models().at("oracles").at("panda_libfranka_model_dump"); }

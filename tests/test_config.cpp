@@ -429,21 +429,6 @@ std::string read_text(const std::string& path) {
   return text.str();
 }
 
-// A directory for this process's generated files, removed when the test program ends.
-const std::filesystem::path& temp_dir() {
-  struct Directory {
-    std::filesystem::path path =
-        std::filesystem::temp_directory_path() / ("csp_test_config_" + std::to_string(::getpid()));
-    Directory() { std::filesystem::create_directories(path); }
-    ~Directory() {
-      std::error_code ignored;
-      std::filesystem::remove_all(path, ignored);
-    }
-  };
-  static const Directory directory;
-  return directory.path;
-}
-
 std::string write_temp(const std::string& file_name, const std::string& text) {
   const std::string path = (temp_dir() / file_name).string();
   std::ofstream out(path);

@@ -68,20 +68,6 @@ ModelOptions options(const std::string& inertia, const std::string& end_effector
   return o;
 }
 
-// Max |actual - expected| <= tolerance, with the worst entry in the failure message.
-template <typename A, typename B>
-::testing::AssertionResult near(const Eigen::MatrixBase<A>& actual, const Eigen::MatrixBase<B>& expected,
-                                double tolerance) {
-  if (actual.rows() != expected.rows() || actual.cols() != expected.cols())
-    return ::testing::AssertionFailure() << "size mismatch";
-  Eigen::Index r = 0, c = 0;
-  const double worst = (actual - expected).cwiseAbs().maxCoeff(&r, &c);
-  if (worst <= tolerance) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "max |difference| " << worst << " > " << tolerance << " at (" << r << ", "
-                                       << c << "): actual " << actual(r, c) << ", expected " << expected(r, c)
-                                       << "\nactual:\n" << actual << "\nexpected:\n" << expected;
-}
-
 Vector7 gravity_of(const Model& model, const Vector7& q) {
   Data data;
   Vector7 g;

@@ -118,18 +118,25 @@ struct SpatialInertia {
   // The same body expressed in frame a, given a_T_b with this inertia in frame b.
   SpatialInertia expressed_in(const Transform& a_T_b) const {
     const Matrix3& R = a_T_b.rotation;
-    return SpatialInertia{mass, R * first_moment, R * rotational * R.transpose()}.shifted(a_T_b.translation);
+    const Matrix3 RI = R * rotational;
+    Matrix3 rotated;   // R I R^T, symmetric: the upper triangle and its mirror
+    for (int r = 0; r < 3; ++r)
+      for (int c = r; c < 3; ++c) rotated(r, c) = rotated(c, r) = RI.row(r).dot(R.row(c));
+    return SpatialInertia{mass, R * first_moment, rotated}.shifted(a_T_b.translation);
   }
 
   // The same body about an origin moved to -p, i.e. in a frame whose origin sees this one at p
-  // (axes unchanged). Parallel axis: -[h]x[p]x - [p]x[h]x - m [p]x^2, expanded with
-  // [a]x[b]x = b a^T - (a.b) 1 so that only symmetric outer products remain.
+  // (axes unchanged). Parallel axis: -[h]x[p]x - [p]x[h]x - m [p]x^2, which with
+  // [a]x[b]x = b a^T - (a.b) 1 and g = h + m p is (2 h.p + m p.p) 1 - p g^T - h p^T.
   SpatialInertia shifted(const Vector3& p) const {
     const Vector3& h = first_moment;
-    Matrix3 I = rotational;
-    I.diagonal().array() += 2.0 * h.dot(p) + mass * p.squaredNorm();
-    I -= p * h.transpose() + h * p.transpose() + mass * p * p.transpose();
-    return {mass, h + mass * p, I};
+    const Vector3 g = h + mass * p;
+    const double diagonal = 2.0 * h.dot(p) + mass * p.squaredNorm();
+    Matrix3 I;
+    for (int r = 0; r < 3; ++r)
+      for (int c = r; c < 3; ++c)   // the result is symmetric: compute the upper triangle
+        I(r, c) = I(c, r) = rotational(r, c) - p[r] * g[c] - h[r] * p[c] + (r == c ? diagonal : 0.0);
+    return {mass, g, I};
   }
 
   Matrix6 matrix() const {
