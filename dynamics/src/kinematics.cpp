@@ -16,7 +16,7 @@ void forward_kinematics(const Model& model, Data& data, const Vector7& q) {
   detail::update_joint_angles(model, data, q);
   Transform O_T_i;
   for (int i = 0; i < kNumJoints; ++i) {
-    O_T_i = model.joint(i).child_pose(O_T_i, data.cos_theta[i], data.sin_theta[i]);
+    O_T_i = O_T_i * model.joint(i).transform(data.cos_theta[i], data.sin_theta[i]);
     data.O_T_joint[i] = O_T_i;
     // Revolute joint about z_i through o_i: S_i = (o_i x z_i; z_i) at the base origin.
     const Vector3 z = O_T_i.rotation.col(2);

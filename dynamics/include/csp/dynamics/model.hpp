@@ -44,18 +44,6 @@ struct JointGeometry {
     return t;
   }
 
-  // O_T_i = O_T_{i-1} ^{i-1}T_i, with the rotation built column by column (24 flops instead of 45).
-  Transform child_pose(const Transform& O_T_parent, double cos_theta, double sin_theta) const {
-    const Matrix3& R = O_T_parent.rotation;
-    const Vector3 y = cos_alpha * R.col(1) + sin_alpha * R.col(2);    // (R RotX(alpha)) column y
-    Transform child;
-    child.rotation.col(0) = cos_theta * R.col(0) + sin_theta * y;
-    child.rotation.col(1) = cos_theta * y - sin_theta * R.col(0);
-    child.rotation.col(2) = cos_alpha * R.col(2) - sin_alpha * R.col(1);
-    child.translation = O_T_parent.translation + R * origin;
-    return child;
-  }
-
   // ^{i-1}R_i v: a vector of frame i in frame i-1 (RotZ(theta), then RotX(alpha)).
   Vector3 rotate(double cos_theta, double sin_theta, const Vector3& v) const {
     const double x = cos_theta * v.x() - sin_theta * v.y();

@@ -118,11 +118,7 @@ struct SpatialInertia {
   // The same body expressed in frame a, given a_T_b with this inertia in frame b.
   SpatialInertia expressed_in(const Transform& a_T_b) const {
     const Matrix3& R = a_T_b.rotation;
-    const Matrix3 RI = R * rotational;
-    Matrix3 rotated;   // R I R^T, symmetric: the upper triangle and its mirror
-    for (int r = 0; r < 3; ++r)
-      for (int c = r; c < 3; ++c) rotated(r, c) = rotated(c, r) = RI.row(r).dot(R.row(c));
-    return SpatialInertia{mass, R * first_moment, rotated}.shifted(a_T_b.translation);
+    return SpatialInertia{mass, R * first_moment, R * rotational * R.transpose()}.shifted(a_T_b.translation);
   }
 
   // The same body about an origin moved to -p, i.e. in a frame whose origin sees this one at p
