@@ -41,6 +41,14 @@ inline Model make_model(const std::string& robot, ModelOptions options = {}) {
   return Model(model_parameters(load_robot_config(robot_file(robot)), options));
 }
 
+// g(q) of a model, with a workspace of its own.
+inline Vector7 gravity_of(const Model& model, const Vector7& q) {
+  Data data;
+  Vector7 g;
+  gravity_torque(model, data, q, g);
+  return g;
+}
+
 // Uniformly random joint positions within the limits; velocities and accelerations of a few rad/s.
 struct RandomStates {
   explicit RandomStates(unsigned seed) : engine(seed) {}

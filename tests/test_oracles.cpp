@@ -68,13 +68,6 @@ ModelOptions options(const std::string& inertia, const std::string& end_effector
   return o;
 }
 
-Vector7 gravity_of(const Model& model, const Vector7& q) {
-  Data data;
-  Vector7 g;
-  gravity_torque(model, data, q, g);
-  return g;
-}
-
 Vector7 coriolis_of(const Model& model, const Vector7& q, const Vector7& dq) {
   Data data;
   Vector7 c;

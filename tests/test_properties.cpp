@@ -78,13 +78,6 @@ LinkWrenches random_wrenches(RandomStates& random) {
   return w;
 }
 
-Vector7 gravity_of(const Model& model, const Vector7& q) {
-  Data data;
-  Vector7 g;
-  gravity_torque(model, data, q, g);
-  return g;
-}
-
 Matrix7 mass_of(const Model& model, const Vector7& q) {
   Data data;
   crba(model, data, q);

@@ -4,12 +4,32 @@
 namespace csp {
 namespace {
 
+using LinkVectors = std::array<Vector3, kNumJoints>;
+
+// Inward: each link passes its wrench to its parent (Craig eqs. 6.51-6.53); tau_i is the z moment.
+void inward_pass(const Model& model, const Data& data, const LinkVectors& force, const LinkVectors& moment,
+                 Vector7& tau) {
+  Vector3 f = Vector3::Zero(), n = Vector3::Zero();
+  for (int i = kNumJoints - 1; i >= 0; --i) {
+    if (i + 1 < kNumJoints) {
+      const JointGeometry& child = model.joint(i + 1);
+      const double c = data.cos_theta[i + 1], s = data.sin_theta[i + 1];
+      const Vector3 f_child = child.rotate(c, s, f);
+      n = child.rotate(c, s, n) + child.origin.cross(f_child);
+      f = f_child;
+    }
+    f += force[i];
+    n += moment[i];
+    tau[i] = n.z();
+  }
+}
+
 // Recursive Newton-Euler in link frames (Craig, ch. 6.5; seed paper eqs. 5-9), with the body
 // inertia taken about the link origin so that the CoM terms fold into one spatial product.
 void newton_euler(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq,
                   const Vector3& gravity, const LinkWrenches& f_ext, Vector7& tau) {
   const Vector3 z = Vector3::UnitZ();
-  std::array<Vector3, kNumJoints> force, moment;
+  LinkVectors force, moment;
 
   detail::update_joint_angles(model, data, q);
 
@@ -33,20 +53,7 @@ void newton_euler(const Model& model, Data& data, const Vector7& q, const Vector
     moment[i] = I.rotational * dw + w.cross(Iw) + I.first_moment.cross(dv) - f_ext[i].tail<3>();
   }
 
-  // Inward: each link passes its wrench to its parent (eqs. 6.51-6.53).
-  Vector3 f = Vector3::Zero(), n = Vector3::Zero();
-  for (int i = kNumJoints - 1; i >= 0; --i) {
-    if (i + 1 < kNumJoints) {
-      const JointGeometry& child = model.joint(i + 1);
-      const double c = data.cos_theta[i + 1], s = data.sin_theta[i + 1];
-      const Vector3 f_child = child.rotate(c, s, f);
-      n = child.rotate(c, s, n) + child.origin.cross(f_child);
-      f = f_child;
-    }
-    f += force[i];
-    n += moment[i];
-    tau[i] = n.z();
-  }
+  inward_pass(model, data, force, moment, tau);
 }
 
 }  // namespace
@@ -60,8 +67,18 @@ void rnea(const Model& model, Data& data, const Vector7& q, const Vector7& dq, c
   newton_euler(model, data, q, dq, ddq, model.gravity(), kNoLinkWrenches, tau);
 }
 
+// At rest only gravity acts (w = dw = 0): each link's net wrench is its weight, m dv and h x dv.
 void gravity_torque(const Model& model, Data& data, const Vector7& q, Vector7& g) {
-  newton_euler(model, data, q, Vector7::Zero(), Vector7::Zero(), model.gravity(), kNoLinkWrenches, g);
+  detail::update_joint_angles(model, data, q);
+  LinkVectors force, moment;
+  Vector3 dv = -model.gravity();
+  for (int i = 0; i < kNumJoints; ++i) {
+    dv = model.joint(i).rotate_back(data.cos_theta[i], data.sin_theta[i], dv);
+    const SpatialInertia& I = model.body(i);
+    force[i] = I.mass * dv;
+    moment[i] = I.first_moment.cross(dv);
+  }
+  inward_pass(model, data, force, moment, g);
 }
 
 void coriolis_torque(const Model& model, Data& data, const Vector7& q, const Vector7& dq, Vector7& c) {

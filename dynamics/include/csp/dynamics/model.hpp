@@ -149,7 +149,6 @@ struct Data {
   // Outputs
   Matrix7 mass_matrix = Matrix7::Zero();
   Matrix7 coriolis_matrix = Matrix7::Zero();
-  Vector7 tau = Vector7::Zero();
   Vector7 ddq = Vector7::Zero();
   Eigen::LLT<Matrix7> mass_cholesky{kNumJoints};
 };
