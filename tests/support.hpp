@@ -41,6 +41,16 @@ inline Model make_model(const std::string& robot, ModelOptions options = {}) {
   return Model(model_parameters(load_robot_config(robot_file(robot)), options));
 }
 
+inline Vector7 v7(const nlohmann::json& values) { return vector_from<7>(values); }
+inline Vector3 v3(const nlohmann::json& values) { return vector_from<3>(values); }
+
+inline Matrix3 matrix3_rowmajor(const nlohmann::json& rows) {
+  Matrix3 m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = rows.at(r).at(c).get<double>();
+  return m;
+}
+
 // g(q) of a model, with a workspace of its own.
 inline Vector7 gravity_of(const Model& model, const Vector7& q) {
   Data data;

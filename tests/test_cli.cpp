@@ -82,8 +82,6 @@ std::string csv(const Vector& v) {
   return out.str();
 }
 
-Vector7 v7(const json& values) { return vector_from<7>(values); }
-Vector3 v3(const json& values) { return vector_from<3>(values); }
 
 const std::map<std::string, std::size_t> kContract = {
     {"O_T_F", 16}, {"O_T_EE", 16}, {"zero_jacobian", 42}, {"mass", 49},     {"coriolis", 7},

@@ -26,15 +26,6 @@ namespace {
 
 using nlohmann::json;
 
-Vector7 v7(const json& values) { return vector_from<7>(values); }
-Vector3 v3(const json& values) { return vector_from<3>(values); }
-
-Matrix3 matrix3_rowmajor(const json& rows) {
-  Matrix3 m;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) m(r, c) = rows.at(r).at(c).get<double>();
-  return m;
-}
 
 // The JSON's {xx, xy, xz, yy, yz, zz} inertia as a symmetric matrix.
 Matrix3 inertia_from(const json& i) {

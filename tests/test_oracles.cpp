@@ -23,21 +23,12 @@ using nlohmann::json;
 
 const json& oracles() { return franka_models().at("oracles"); }
 
-Vector7 v7(const json& values) { return vector_from<7>(values); }
-Vector3 v3(const json& values) { return vector_from<3>(values); }
 
 Matrix7 matrix7(const json& values, bool column_major) {
   const Eigen::Matrix<double, 49, 1> flat = vector_from<49>(values);
   Matrix7 m;
   for (int r = 0; r < 7; ++r)
     for (int c = 0; c < 7; ++c) m(r, c) = column_major ? flat[c * 7 + r] : flat[r * 7 + c];
-  return m;
-}
-
-Matrix3 matrix3_rowmajor(const json& rows) {
-  Matrix3 m;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) m(r, c) = rows.at(r).at(c).get<double>();
   return m;
 }
 
