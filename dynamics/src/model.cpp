@@ -11,10 +11,20 @@ const LinkWrenches kNoLinkWrenches = [] {
   return none;
 }();
 
+namespace {
 JointGeometry joint_geometry(const MdhParameters& row) {
   const double ca = std::cos(row.alpha), sa = std::sin(row.alpha);
   return {ca, sa, row.theta_offset, Vector3(row.a, -sa * row.d, ca * row.d)};
 }
+
+void check_flange_body(const RigidBodyInertia& body, const char* what) {
+  if (!std::isfinite(body.mass) || body.mass < 0.0 || !body.com.allFinite() || !body.inertia.allFinite())
+    throw std::invalid_argument(std::string(what) + ": mass must be finite and >= 0, CoM and inertia finite");
+  if (!body.inertia.isApprox(body.inertia.transpose(), 1e-12))
+    throw std::invalid_argument(std::string(what) + ": inertia must be symmetric");
+}
+
+}  // namespace
 
 Transform mdh_transform(const MdhParameters& row, double q) {
   const double theta = q + row.theta_offset;
@@ -29,15 +39,6 @@ RigidBodyInertia combine(const RigidBodyInertia& a, const RigidBodyInertia& b) {
   const Matrix3 ra = skew(a.com - com), rb = skew(b.com - com);
   return {mass, com, a.inertia - a.mass * ra * ra + b.inertia - b.mass * rb * rb};
 }
-
-namespace {
-void check_flange_body(const RigidBodyInertia& body, const char* what) {
-  if (!std::isfinite(body.mass) || body.mass < 0.0 || !body.com.allFinite() || !body.inertia.allFinite())
-    throw std::invalid_argument(std::string(what) + ": mass must be finite and >= 0, CoM and inertia finite");
-  if (!body.inertia.isApprox(body.inertia.transpose(), 1e-12))
-    throw std::invalid_argument(std::string(what) + ": inertia must be symmetric");
-}
-}  // namespace
 
 Model::Model(const ModelParameters& parameters) : parameters_(parameters) {
   check_flange_body(parameters_.end_effector, "end effector");

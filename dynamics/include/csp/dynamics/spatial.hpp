@@ -34,10 +34,6 @@ struct Transform {
     return {rotation * b_T_c.rotation, rotation * b_T_c.translation + translation};
   }
   Vector3 operator*(const Vector3& point_in_b) const { return rotation * point_in_b + translation; }
-  Transform inverse() const {
-    const Matrix3 rt = rotation.transpose();
-    return {rt, -(rt * translation)};
-  }
   Eigen::Matrix4d matrix() const {
     Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
     m.topLeftCorner<3, 3>() = rotation;
