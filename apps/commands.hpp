@@ -16,6 +16,7 @@ using Command = std::function<int()>;
 Command add_model_command(CLI::App& app);
 Command add_workspace_command(CLI::App& app);
 Command add_demo_command(CLI::App& app);
+Command add_emulate_command(CLI::App& app);
 
 struct WorkspaceArguments {
   ModelArguments model;

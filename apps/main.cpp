@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   add(add_model_command);
   add(add_workspace_command);
   add(add_demo_command);
+  add(add_emulate_command);
 
   // CLI11 would report an unknown command as a missing one; name it instead.
   std::string known;

@@ -59,6 +59,19 @@ inline Vector7 gravity_of(const Model& model, const Vector7& q) {
   return g;
 }
 
+// Potential energy from the parameters (not from the Model's lumped bodies): every link CoM, the
+// end effector and the load, V = -sum m_i g . c_i.
+inline double potential_energy(const Model& model, const Vector7& q) {
+  Data data;
+  forward_kinematics(model, data, q);
+  const ModelParameters& p = model.parameters();
+  double V = 0.0;
+  for (int i = 0; i < kNumJoints; ++i) V -= p.links[i].mass * p.gravity.dot(data.O_T_joint[i] * p.links[i].com);
+  V -= p.end_effector.mass * p.gravity.dot(data.O_T_F * p.end_effector.com);
+  V -= p.load.mass * p.gravity.dot(data.O_T_F * p.load.com);
+  return V;
+}
+
 // Uniformly random joint positions within the limits; velocities and accelerations of a few rad/s.
 struct RandomStates {
   explicit RandomStates(unsigned seed) : engine(seed) {}

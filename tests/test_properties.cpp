@@ -98,19 +98,6 @@ Matrix6x7 zero_jacobian_of(const Model& model, const Vector7& q, Frame frame) {
   return J;
 }
 
-// Potential energy from the parameters (not from the Model's lumped bodies): every link CoM, the
-// end effector and the load, V = -sum m_i g . c_i.
-double potential_energy(const Model& model, const Vector7& q) {
-  Data data;
-  forward_kinematics(model, data, q);
-  const ModelParameters& p = model.parameters();
-  double V = 0.0;
-  for (int i = 0; i < kNumJoints; ++i) V -= p.links[i].mass * p.gravity.dot(data.O_T_joint[i] * p.links[i].com);
-  V -= p.end_effector.mass * p.gravity.dot(data.O_T_F * p.end_effector.com);
-  V -= p.load.mass * p.gravity.dot(data.O_T_F * p.load.com);
-  return V;
-}
-
 double kinetic_energy(const Model& model, const Vector7& q, const Vector7& dq) {
   return 0.5 * dq.dot(mass_of(model, q) * dq);
 }

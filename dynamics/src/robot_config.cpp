@@ -2,99 +2,13 @@
 
 #include <cmath>
 #include <filesystem>
-#include <initializer_list>
-#include <set>
 
 #include <Eigen/Eigenvalues>
-#include <yaml-cpp/yaml.h>
+
+#include "csp/dynamics/yaml_field.hpp"
 
 namespace csp {
 namespace {
-
-// A YAML node together with the file and key path it came from, so that every error can say
-// exactly where it is.
-class Field {
- public:
-  Field(const YAML::Node& node, std::string file, std::string path)
-      : node_(node), file_(std::move(file)), path_(std::move(path)) {}
-
-  [[noreturn]] void fail(const std::string& expected) const {
-    throw ConfigError(file_ + ": " + (path_.empty() ? "top level" : path_) + ": expected " + expected);
-  }
-
-  bool has(const std::string& key) const { return node_.IsMap() && node_[key]; }
-
-  Field operator[](const std::string& key) const {
-    if (!node_.IsMap()) fail("a mapping");
-    const YAML::Node child = node_[key];
-    const std::string child_path = path_.empty() ? key : path_ + "." + key;
-    if (!child) Field(node_, file_, child_path).fail("this key (missing)");
-    return Field(child, file_, child_path);
-  }
-
-  Field operator[](std::size_t index) const {
-    return Field(node_[index], file_, path_ + "[" + std::to_string(index) + "]");
-  }
-
-  // Reject keys other than the allowed ones (a typo must not become a silent default).
-  void allow_only(std::initializer_list<const char*> keys) const {
-    if (!node_.IsMap()) fail("a mapping");
-    const std::set<std::string> allowed(keys.begin(), keys.end());
-    for (const auto& item : node_) {
-      const auto key = item.first.as<std::string>();
-      if (!allowed.contains(key)) {
-        std::string list;
-        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
-        Field(node_, file_, path_.empty() ? key : path_ + "." + key).fail("no such key (allowed: " + list + ")");
-      }
-    }
-  }
-
-  std::vector<std::string> keys() const {
-    if (!node_.IsMap()) fail("a mapping");
-    std::vector<std::string> out;
-    for (const auto& item : node_) out.push_back(item.first.as<std::string>());
-    return out;
-  }
-
-  std::size_t sequence_size() const {
-    if (!node_.IsSequence()) fail("a list");
-    return node_.size();
-  }
-
-  double number() const {
-    double value = 0.0;
-    if (!node_.IsScalar() || !YAML::convert<double>::decode(node_, value)) fail("a number");
-    if (!std::isfinite(value)) fail("a finite number");
-    return value;
-  }
-
-  bool boolean() const {
-    bool value = false;
-    if (!node_.IsScalar() || !YAML::convert<bool>::decode(node_, value)) fail("true or false");
-    return value;
-  }
-
-  std::string text() const {
-    if (!node_.IsScalar()) fail("a string");
-    return node_.as<std::string>();
-  }
-
-  template <int N>
-  Eigen::Matrix<double, N, 1> vector() const {
-    if (!node_.IsSequence() || node_.size() != N) fail("a list of " + std::to_string(N) + " numbers");
-    Eigen::Matrix<double, N, 1> v;
-    for (int i = 0; i < N; ++i) v[i] = (*this)[static_cast<std::size_t>(i)].number();
-    return v;
-  }
-
-  const std::string& file() const { return file_; }
-
- private:
-  YAML::Node node_;
-  std::string file_;
-  std::string path_;
-};
 
 Matrix3 inertia_tensor(const Field& field) {
   const Eigen::Matrix<double, 6, 1> v = field.vector<6>();   // xx, xy, xz, yy, yz, zz
@@ -215,6 +129,20 @@ std::vector<std::string> names_of(const Map& map, const char* implicit = nullptr
 
 }  // namespace
 
+YAML::Node load_yaml_file(const std::string& path, const std::string& what) {
+  if (!std::filesystem::is_regular_file(path))
+    throw ConfigError(path + ": cannot open the " + what + " (missing, or not a regular file)");
+  try {
+    return YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(path + ": cannot open the " + what);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ": not valid YAML: " + e.msg + " (line " + std::to_string(e.mark.line + 1) + ")");
+  } catch (const std::exception& e) {   // e.g. an I/O error while reading
+    throw ConfigError(path + ": cannot read the " + what + ": " + e.what());
+  }
+}
+
 bool is_physical_inertia(const Matrix3& I) {
   if (!I.isApprox(I.transpose(), 1e-12)) return false;
   const Vector3 moments = Eigen::SelfAdjointEigenSolver<Matrix3>(I, Eigen::EigenvaluesOnly).eigenvalues();
@@ -226,17 +154,7 @@ bool is_physical_inertia(const Matrix3& I) {
 }
 
 RobotConfig load_robot_config(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) throw ConfigError(path + ": cannot open the robot file (missing, or not a regular file)");
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(path + ": cannot open the robot file");
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(path + ": not valid YAML: " + e.msg + " (line " + std::to_string(e.mark.line + 1) + ")");
-  } catch (const std::exception& e) {   // e.g. an I/O error while reading
-    throw ConfigError(path + ": cannot read the robot file: " + e.what());
-  }
+  const YAML::Node root = load_yaml_file(path, "robot file");
   const Field top(root, path, "");
   top.allow_only({"name", "kinematics", "end_effectors", "limits", "inertia", "friction"});
 

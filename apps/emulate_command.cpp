@@ -1,0 +1,147 @@
+// csp emulate: run a scenario on the emulated robot with its built-in controller and report the
+// tracking error, reflexes and timing; optionally write the per-cycle CSV log.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "commands.hpp"
+#include "csp/rt/controllers.hpp"
+#include "csp/rt/csv_log.hpp"
+
+namespace csp::cli {
+namespace {
+
+struct EmulateArguments {
+  std::string scenario;
+  std::optional<double> duration;
+  std::optional<long long> seed;
+  std::string clock;
+  std::string log;
+};
+
+// Tracking error of q against the scenario's reference trajectory, and the largest estimated
+// external torque, accumulated cycle by cycle.
+class Summary {
+ public:
+  Summary(const rt::ExcitationTrajectory& trajectory, const Vector7& q0) : trajectory_(trajectory), q0_(q0) {}
+
+  void add(const rt::RobotState& state, double motion_time) {
+    Vector7 q_ref, dq_ref, ddq_ref;
+    trajectory_.evaluate(q0_, motion_time, q_ref, dq_ref, ddq_ref);
+    const Vector7 error = Vector7(state.q.data()) - q_ref;
+    squared_error_ += error.cwiseAbs2();
+    max_error_ = max_error_.cwiseMax(error.cwiseAbs());
+    max_tau_ext_ = max_tau_ext_.cwiseMax(Vector7(state.tau_ext_hat_filtered.data()).cwiseAbs());
+    ++count_;
+  }
+
+  void print() const {
+    if (count_ == 0) return;
+    const Vector7 rms = (squared_error_ / static_cast<double>(count_)).cwiseSqrt();
+    auto row = [](const char* name, const Vector7& v, double scale) {
+      std::printf("  %-34s", name);
+      for (int i = 0; i < kNumJoints; ++i) std::printf(" %8.3f", scale * v[i]);
+      std::printf("\n");
+    };
+    std::printf("  %-34s %8s %8s %8s %8s %8s %8s %8s\n", "joint", "1", "2", "3", "4", "5", "6", "7");
+    row("tracking error RMS [mrad]", rms, 1e3);
+    row("tracking error max [mrad]", max_error_, 1e3);
+    row("max |tau_ext_hat_filtered| [N m]", max_tau_ext_, 1.0);
+  }
+
+ private:
+  rt::ExcitationTrajectory trajectory_;
+  Vector7 q0_;
+  Vector7 squared_error_ = Vector7::Zero(), max_error_ = Vector7::Zero(), max_tau_ext_ = Vector7::Zero();
+  long long count_ = 0;
+};
+
+void print_percentiles(const char* name, const rt::Percentiles& p) {
+  if (p.count == 0) return;
+  std::printf("  %-34s p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f us (%zu samples)\n", name, p.p50, p.p99, p.p999,
+              p.max, p.count);
+}
+
+int run_emulate(const EmulateArguments& args) {
+  rt::Scenario scenario = rt::load_scenario(args.scenario.empty() ? rt::default_scenario_path() : args.scenario);
+  if (args.duration) {
+    if (!(*args.duration > 0.0) || !std::isfinite(*args.duration)) throw UsageError("--duration: expected a positive number of seconds");
+    scenario.duration = *args.duration;
+  }
+  if (args.seed) {
+    if (*args.seed < 0) throw UsageError("--seed: expected a non-negative whole number");
+    scenario.seed = static_cast<uint64_t>(*args.seed);
+    scenario.emulator.seed = scenario.seed;
+    scenario.command_faults.seed = scenario.seed + 1;
+  }
+  if (!args.clock.empty()) scenario.clock = args.clock == "realtime" ? rt::Clock::kRealtime : rt::Clock::kLockstep;
+
+  rt::Emulator emulator(scenario.emulator);
+  const rt::BuiltinController builtin = rt::make_controller(scenario.controller, scenario.controller_faults, emulator);
+  std::unique_ptr<rt::CsvLog> log;
+  if (!args.log.empty()) log = std::make_unique<rt::CsvLog>(args.log);
+  if (log) log->write(emulator.state(), rt::CycleInfo{});   // the state the motion starts from
+
+  Summary summary(scenario.controller.trajectory, Vector7(emulator.state().q_d.data()));
+  const uint64_t start_ms = emulator.state().time.toMSec();
+  rt::LoopOptions options;
+  options.clock = scenario.clock;
+  options.faults = scenario.command_faults;
+  options.max_duration = scenario.duration;
+  options.observer = [&](const rt::RobotState& state, const rt::CycleInfo& cycle) {
+    if (log) log->write(state, cycle);
+    summary.add(state, static_cast<double>(state.time.toMSec() - start_ms) * 1e-3);
+  };
+
+  std::printf("csp emulate: %s (%s)\n  robot %s, %s clock, %.3f s, seed %llu, controller %s (%s mode)\n",
+              scenario.name.c_str(), scenario.path.c_str(), scenario.robot_file.c_str(),
+              scenario.clock == rt::Clock::kLockstep ? "lockstep" : "real-time", scenario.duration,
+              static_cast<unsigned long long>(scenario.seed), scenario.controller.type.c_str(),
+              rt::control_mode_name(builtin.mode));
+  rt::MotionResult result;
+  std::string failure;
+  try {
+    result = rt::run_motion(emulator, builtin.mode, builtin.controller, options);
+  } catch (const std::exception& e) {   // the controller threw: the robot is in Reflex, the log is complete
+    failure = e.what();
+  }
+
+  const rt::EmulatorCounters& counters = emulator.counters();
+  std::printf("  ran %llu cycles (%.3f s), lost commands %llu (longest run %d)\n",
+              static_cast<unsigned long long>(counters.motion_cycles), static_cast<double>(counters.motion_cycles) * 1e-3,
+              static_cast<unsigned long long>(counters.lost_commands), counters.max_consecutive_lost);
+  summary.print();
+  for (const std::string& warning : result.timing.warnings) std::printf("  warning: %s\n", warning.c_str());
+  print_percentiles("controller compute time", result.timing.controller_compute_us);
+  print_percentiles("wake-up latency after deadline", result.timing.wakeup_latency_us);
+  if (scenario.clock == rt::Clock::kRealtime)
+    std::printf("  overruns %llu\n", static_cast<unsigned long long>(result.timing.overruns));
+  if (log) std::printf("  log: %s (%llu rows)\n", log->path().c_str(), static_cast<unsigned long long>(log->rows()));
+
+  const rt::RobotState& state = emulator.state();
+  if (!failure.empty() || state.robot_mode == rt::RobotMode::kReflex) {
+    std::printf("  REFLEX at t = %.3f s: %s\n", state.time.toSec(),
+                emulator.reflex_reason().c_str());
+    return 1;
+  }
+  std::printf("  finished without reflex\n");
+  return 0;
+}
+
+}  // namespace
+
+Command add_emulate_command(CLI::App& app) {
+  auto args = std::make_shared<EmulateArguments>();
+  CLI::App* cmd = app.add_subcommand("emulate", "Run a scenario on the emulated 1 kHz robot (configs/scenarios/)");
+  cmd->add_option("scenario", args->scenario, "Scenario file (default: configs/scenarios/default.yaml)");
+  cmd->add_option("--duration", args->duration, "Override the scenario's duration [s]");
+  cmd->add_option("--seed", args->seed, "Override the scenario's seed (sensor noise, command losses)");
+  cmd->add_option("--clock", args->clock, "lockstep (simulated time) or realtime (1 kHz wall clock)")
+      ->check(CLI::IsMember({"lockstep", "realtime"}));
+  cmd->add_option("--log", args->log, "Write the per-cycle CSV log to this file");
+  return [args] { return run_emulate(*args); };
+}
+
+}  // namespace csp::cli

@@ -1,0 +1,105 @@
+// Reading validated YAML files: a node that knows the file and key path it came from, so that
+// every error names exactly where it is (robot files, scenario files).
+#pragma once
+
+#include <cmath>
+#include <initializer_list>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "csp/dynamics/robot_config.hpp"
+
+namespace csp {
+
+// Parse a YAML file; a missing, unreadable or malformed file throws ConfigError naming it.
+YAML::Node load_yaml_file(const std::string& path, const std::string& what);
+
+// A YAML node together with the file and key path it came from, so that every error can say
+// exactly where it is.
+class Field {
+ public:
+  Field(const YAML::Node& node, std::string file, std::string path)
+      : node_(node), file_(std::move(file)), path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const std::string& expected) const {
+    throw ConfigError(file_ + ": " + (path_.empty() ? "top level" : path_) + ": expected " + expected);
+  }
+
+  bool has(const std::string& key) const { return node_.IsMap() && node_[key]; }
+
+  Field operator[](const std::string& key) const {
+    if (!node_.IsMap()) fail("a mapping");
+    const YAML::Node child = node_[key];
+    const std::string child_path = path_.empty() ? key : path_ + "." + key;
+    if (!child) Field(node_, file_, child_path).fail("this key (missing)");
+    return Field(child, file_, child_path);
+  }
+
+  Field operator[](std::size_t index) const {
+    return Field(node_[index], file_, path_ + "[" + std::to_string(index) + "]");
+  }
+
+  // Reject keys other than the allowed ones (a typo must not become a silent default).
+  void allow_only(std::initializer_list<const char*> keys) const {
+    if (!node_.IsMap()) fail("a mapping");
+    const std::set<std::string> allowed(keys.begin(), keys.end());
+    for (const auto& item : node_) {
+      const auto key = item.first.as<std::string>();
+      if (!allowed.contains(key)) {
+        std::string list;
+        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
+        Field(node_, file_, path_.empty() ? key : path_ + "." + key).fail("no such key (allowed: " + list + ")");
+      }
+    }
+  }
+
+  std::vector<std::string> keys() const {
+    if (!node_.IsMap()) fail("a mapping");
+    std::vector<std::string> out;
+    for (const auto& item : node_) out.push_back(item.first.as<std::string>());
+    return out;
+  }
+
+  std::size_t sequence_size() const {
+    if (!node_.IsSequence()) fail("a list");
+    return node_.size();
+  }
+
+  double number() const {
+    double value = 0.0;
+    if (!node_.IsScalar() || !YAML::convert<double>::decode(node_, value)) fail("a number");
+    if (!std::isfinite(value)) fail("a finite number");
+    return value;
+  }
+
+  bool boolean() const {
+    bool value = false;
+    if (!node_.IsScalar() || !YAML::convert<bool>::decode(node_, value)) fail("true or false");
+    return value;
+  }
+
+  std::string text() const {
+    if (!node_.IsScalar()) fail("a string");
+    return node_.as<std::string>();
+  }
+
+  template <int N>
+  Eigen::Matrix<double, N, 1> vector() const {
+    if (!node_.IsSequence() || node_.size() != N) fail("a list of " + std::to_string(N) + " numbers");
+    Eigen::Matrix<double, N, 1> v;
+    for (int i = 0; i < N; ++i) v[i] = (*this)[static_cast<std::size_t>(i)].number();
+    return v;
+  }
+
+  const std::string& file() const { return file_; }
+
+ private:
+  YAML::Node node_;
+  std::string file_;
+  std::string path_;
+};
+
+}  // namespace csp

@@ -1,0 +1,167 @@
+// The emulated robot: one Franka Control Interface cycle per step(), at 1 kHz. Stages run in a
+// fixed order each cycle (DESIGN.md): read the command -> motion generator and torque command
+// -> inner torque loop and plant integration (substeps) -> sensors and estimators -> limit and
+// reflex checks -> publish the RobotState.
+//
+// Two models: the plant (what the arm really is: inertia, link-side friction, armature, load,
+// external wrenches) and the robot's internal model (what its firmware believes: gravity
+// compensation, external torque estimate, the Model API). Making them differ is how CSP emulates
+// a real robot whose model is not perfect.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "csp/dynamics/algorithms.hpp"
+#include "csp/rt/robot_state.hpp"
+
+namespace csp::rt {
+
+inline constexpr double kDeltaT = 1e-3;   // FCI cycle [s] (libfranka kDeltaT)
+
+enum class ControlMode { kTorque, kJointPosition, kJointVelocity };
+const char* control_mode_name(ControlMode mode);
+
+// One cycle's command as it reaches the robot: torques without gravity (torque mode), or the
+// commanded joint positions q_c / velocities dq_c of an external motion generator.
+struct Command {
+  Vector7 values = Vector7::Zero();
+  bool motion_finished = false;
+};
+
+// Robot::setCollisionBehavior: contact (lower) and collision (upper) thresholds on the estimated
+// external joint torques [N m] and Cartesian wrench on K [N, N m], for accelerating and nominal motion.
+struct CollisionBehavior {
+  Vector7 lower_torque_acceleration, upper_torque_acceleration, lower_torque_nominal, upper_torque_nominal;
+  Vector6 lower_force_acceleration, upper_force_acceleration, lower_force_nominal, upper_force_nominal;
+};
+// The values of libfranka's examples (setDefaultBehavior): 20 during acceleration, 10 nominal.
+CollisionBehavior default_collision_behavior();
+
+// Robot::setJointImpedance default of libfranka's examples [N m/rad].
+Vector7 default_joint_stiffness();
+
+// A push or a contact scripted by a scenario: `force` and `moment` (base frame) act on link `link`
+// (1..7) at `point` (link frame) from `start` to `end` [s], ramped in and out over `ramp` [s].
+struct ExternalWrench {
+  int link = 7;
+  Vector3 point = Vector3::Zero();
+  Vector3 force = Vector3::Zero();
+  Vector3 moment = Vector3::Zero();
+  double start = 0.0, end = 0.0, ramp = 0.0;
+};
+
+struct EmulatorSettings {
+  ModelParameters plant;                 // the arm (inertia, friction, load, limits, gravity)
+  ModelParameters internal;              // the robot's own model (may use another inertial set)
+  Vector7 armature = Vector7::Zero();    // rotor inertia the torque loop does not hide [kg m^2]
+  Vector7 q_initial = Vector7::Zero();   // the arm starts at rest here, in Idle
+  int substeps = 2;                      // plant integration steps per 1 ms cycle
+  double torque_loop_bandwidth_hz = 300.0;   // first-order inner torque loop
+  double tau_ext_cutoff_hz = 30.0;       // low-pass of tau_ext_hat_filtered
+  double power_limit = 250.0;            // sum of positive joint powers tau_J dq [W]
+  bool gravity_compensation = true;      // always on for a real robot; off only to test the plant
+  Vector7 tau_J_noise = Vector7::Zero(); // standard deviation of the torque-sensor noise [N m]
+  Vector7 tau_J_bias = Vector7::Zero();  // torque-sensor offset [N m]
+  uint64_t seed = 1;                     // sensor noise
+  CollisionBehavior collision = default_collision_behavior();
+  Vector7 joint_stiffness = default_joint_stiffness();
+  std::vector<ExternalWrench> external_wrenches;
+};
+
+// Cumulative counts over the emulator's life.
+struct EmulatorCounters {
+  uint64_t cycles = 0;
+  uint64_t motion_cycles = 0;
+  uint64_t lost_commands = 0;
+  int max_consecutive_lost = 0;
+  uint64_t reflexes = 0;
+};
+
+// A control call that must not happen now (libfranka InvalidOperationException).
+class InvalidOperation : public std::logic_error {
+ public:
+  using std::logic_error::logic_error;
+};
+
+class Emulator {
+ public:
+  explicit Emulator(const EmulatorSettings& settings);
+
+  const RobotState& state() const { return state_; }
+  const Model& internal_model() const { return internal_; }
+  const Model& plant_model() const { return plant_; }
+  const EmulatorSettings& settings() const { return settings_; }
+  const EmulatorCounters& counters() const { return counters_; }
+  bool in_motion() const { return mode_.has_value(); }
+  // Why the last reflex happened: the error names, or what the controller did wrong.
+  const std::string& reflex_reason() const { return reflex_reason_; }
+
+  // Motions, like the FCI: start (Idle -> Move), one step per 1 ms cycle, finish (-> Idle).
+  void start_motion(ControlMode mode);
+  // One cycle. `command` is null when no command arrived in time (lost): the last torque is
+  // reused, a motion generator is extrapolated; 20 in a row end the motion in a reflex.
+  void step(const Command* command);
+  // The controller failed (threw, or the motion was aborted): brake to standstill in Reflex.
+  void abort_motion(const std::string& reason);
+
+  // Configuration between motions (Robot::set...); InvalidOperation during a motion.
+  void set_collision_behavior(const CollisionBehavior& behavior);
+  void set_joint_impedance(const Vector7& stiffness);
+  // What the robot is told it carries (flange frame): its model only; what the arm really
+  // carries is the plant's load, set by the scenario.
+  void set_load(const RigidBodyInertia& load);
+  void set_EE(const Transform& NE_T_EE);
+  void set_K(const Transform& EE_T_K);
+  // Clears current_errors and releases the brakes (Reflex -> Idle).
+  void automatic_error_recovery();
+
+ private:
+  // Idle: the robot holds q_hold with its joint impedance. Move: a motion runs. Braking: a reflex
+  // decelerates the arm. Braked: standstill on closed brakes until error recovery.
+  enum class Phase { kIdle, kMove, kBraking, kBraked };
+
+  void rebuild_internal_model();
+  void require_no_motion(const char* operation) const;
+  void record_reception(bool received);
+  Errors run_motion_generator(const Command* command);
+  void gravity_compensation_torque();
+  LinkWrenches external_link_wrenches(double t);
+  void integrate(const Vector7& user_torque);
+  void update_sensors_and_estimates();
+  Errors check_limits_and_collisions();
+  void enter_reflex(const Errors& errors, const std::string& reason);
+  void publish();
+
+  EmulatorSettings settings_;
+  ModelParameters plant_parameters_, internal_parameters_;
+  Model plant_, internal_;
+  Data plant_data_, internal_data_;
+  Transform F_T_NE_, NE_T_EE_;   // configured end effector, and setEE on top of it
+  RobotState state_;
+  EmulatorCounters counters_;
+  std::optional<ControlMode> mode_;
+  Phase phase_ = Phase::kIdle;
+  std::string reflex_reason_;
+
+  // Plant and inner torque loop
+  Vector7 q_, dq_, ddq_, q_hold_, gravity_internal_, tau_motor_, tau_J_true_;
+  // Motion generator and command reception
+  Vector7 q_c_, dq_c_, ddq_c_, last_user_torque_;
+  bool first_command_ = true;
+  int consecutive_lost_ = 0;
+  std::array<bool, 100> received_{};   // the last 100 cycles (control_command_success_rate)
+  int received_index_ = 0, received_count_ = 0;
+  // Sensors and estimators
+  Vector7 tau_J_measured_, tau_J_measured_previous_, dtau_J_, dq_previous_, tau_ext_raw_, tau_ext_filtered_;
+  Matrix6x7 jacobian_;
+  Vector6 O_F_ext_, K_F_ext_;
+  std::mt19937_64 noise_rng_;
+  std::normal_distribution<double> unit_normal_{0.0, 1.0};
+};
+
+}  // namespace csp::rt

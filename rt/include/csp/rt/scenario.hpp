@@ -1,0 +1,64 @@
+// Scenario files (configs/scenarios/*.yaml, format in docs/emulator.md): which robot, plant and
+// internal model, where the arm starts, which built-in controller runs for how long on which
+// clock, and what goes wrong (lost commands, a throwing controller, pushes on the links).
+// Loading validates every field and throws ConfigError naming the file, the key and what was
+// expected.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "csp/rt/control_loop.hpp"
+#include "csp/rt/emulator.hpp"
+
+namespace csp::rt {
+
+// A smooth excitation around the start pose: q_d = q0 + r(t) A (sin(2 pi f t + phase) - sin(phase)),
+// r a quintic ramp from 0 to 1 over `ramp` seconds, so q_d starts at q0 at rest.
+struct ExcitationTrajectory {
+  Vector7 amplitude = Vector7::Zero();      // [rad]
+  Vector7 frequency_hz = Vector7::Zero();   // [Hz]
+  Vector7 phase = Vector7::Zero();          // [rad]
+  double ramp = 1.0;                        // [s]
+
+  // Desired position, velocity and acceleration at time t.
+  void evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const;
+};
+
+struct ControllerSpec {
+  // float (gravity-compensated, optional joint damping), joint_impedance (torque, tracks the
+  // trajectory), joint_position / joint_velocity (the robot's motion generator interface),
+  // cartesian_impedance (holds the start pose of K).
+  std::string type = "float";
+  Vector7 stiffness = Vector7::Zero();   // joint_impedance [N m/rad]
+  Vector7 damping = Vector7::Zero();     // float, joint_impedance [N m s/rad]
+  bool feedforward = true;               // joint_impedance: add M(q) ddq_d + c(q, dq)
+  double translational_stiffness = 150.0, rotational_stiffness = 10.0;   // cartesian_impedance
+  ExcitationTrajectory trajectory;       // zero amplitude: hold the start pose
+};
+
+// Faults of the controller itself, at motion time [s].
+struct ControllerFaults {
+  std::optional<double> throw_at;   // the controller throws std::runtime_error
+  std::optional<double> nan_at;     // the controller returns NaN
+};
+
+struct Scenario {
+  std::string path;
+  std::string name;
+  std::string robot_file;
+  EmulatorSettings emulator;
+  ControllerSpec controller;
+  ControllerFaults controller_faults;
+  CommandFaults command_faults;
+  double duration = 10.0;   // [s]
+  Clock clock = Clock::kLockstep;
+  uint64_t seed = 1;
+};
+
+Scenario load_scenario(const std::string& path);
+
+// The scenario the README's main command runs (configs/scenarios/default.yaml).
+std::string default_scenario_path();
+
+}  // namespace csp::rt

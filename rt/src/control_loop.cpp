@@ -1,0 +1,211 @@
+#include "csp/rt/control_loop.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <exception>
+
+namespace csp::rt {
+namespace {
+
+constexpr int64_t kCycleNs = 1'000'000;
+
+int64_t monotonic_ns() {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+void sleep_until_ns(int64_t deadline) {
+  timespec t{};
+  t.tv_sec = deadline / 1'000'000'000;
+  t.tv_nsec = deadline % 1'000'000'000;
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
+  }
+}
+
+// One motion's bookkeeping shared by both clocks.
+class MotionRunner {
+ public:
+  MotionRunner(Emulator& emulator, const Controller& controller, const LoopOptions& options)
+      : emulator_(emulator), controller_(controller), options_(options), channel_(options.faults) {}
+
+  // Calls the controller for the current state; on an exception the motion is aborted, the cycle
+  // reported, and the exception rethrown.
+  Command call_controller(Duration period) {
+    const int64_t start = monotonic_ns();
+    try {
+      Command command = controller_(emulator_.state(), period);
+      compute_us_.push_back(static_cast<double>(monotonic_ns() - start) * 1e-3);
+      return command;
+    } catch (const std::exception& e) {
+      fail("the controller threw: " + std::string(e.what()));
+    } catch (...) {
+      fail("the controller threw a non-standard exception");
+    }
+  }
+
+  // One cycle with the command that was sent (or none) and whether it arrived.
+  void step(const std::optional<Command>& sent, bool arrived) {
+    CycleInfo info;
+    info.command_sent = sent.has_value();
+    info.command_received = sent && arrived;
+    if (sent) info.command = *sent;
+    if (!info.command_received && emulator_.in_motion()) ++report_.lost_commands;
+    emulator_.step(info.command_received ? &info.command : nullptr);
+    ++report_.cycles;
+    if (options_.observer) options_.observer(emulator_.state(), info);
+  }
+
+  bool network_delivers() { return channel_.delivers(report_.cycles); }
+
+  bool done() const {
+    if (!emulator_.in_motion()) return true;   // reflex, or motion_finished was received
+    // The closing cycle in finish() is the last one of max_duration.
+    return options_.max_duration && static_cast<double>(report_.cycles + 1) * kDeltaT >= *options_.max_duration - 1e-9;
+  }
+
+  MotionResult finish() {
+    MotionResult result;
+    if (emulator_.in_motion()) {
+      // max_duration reached: end the motion as a controller returning MotionFinished would.
+      Command stop;
+      stop.motion_finished = true;
+      stop.values = last_values_;
+      step(stop, true);
+    }
+    result.reflex = emulator_.state().robot_mode == RobotMode::kReflex;
+    result.errors = emulator_.state().last_motion_errors;
+    result.reason = emulator_.reflex_reason();
+    report_.controller_compute_us = percentiles(compute_us_);
+    report_.wakeup_latency_us = percentiles(latency_us_);
+    result.timing = report_;
+    return result;
+  }
+
+  void remember(const Command& command) { last_values_ = command.values; }
+  TimingReport& report() { return report_; }
+  std::vector<double>& latency_us() { return latency_us_; }
+
+ private:
+  [[noreturn]] void fail(const std::string& reason) {
+    const std::exception_ptr error = std::current_exception();
+    // The robot gets no command this cycle and reacts with a braking reflex.
+    emulator_.abort_motion(reason);
+    step(std::nullopt, false);
+    std::rethrow_exception(error);
+  }
+
+  Emulator& emulator_;
+  const Controller& controller_;
+  const LoopOptions& options_;
+  CommandChannel channel_;
+  TimingReport report_;
+  std::vector<double> compute_us_, latency_us_;
+  Vector7 last_values_ = Vector7::Zero();
+};
+
+MotionResult run_lockstep(MotionRunner& runner) {
+  Duration period(0);
+  while (true) {
+    const Command command = runner.call_controller(period);
+    runner.remember(command);
+    runner.step(command, runner.network_delivers());
+    period = Duration(1);
+    if (runner.done()) break;
+  }
+  return runner.finish();
+}
+
+MotionResult run_realtime(MotionRunner& runner, const LoopOptions& options) {
+  std::vector<std::string> missing = enable_realtime_scheduling();
+  if (!missing.empty()) {
+    std::string text = "no real-time scheduling (" + missing.front();
+    for (std::size_t i = 1; i < missing.size(); ++i) text += "; " + missing[i];
+    text += ")";
+    if (options.realtime_config == RealtimeConfig::kEnforce)
+      throw RealtimeError(text + "; use RealtimeConfig::kIgnore to run anyway");
+    runner.report().warnings.push_back(text + ": running without, timing will suffer");
+  }
+  runner.latency_us().reserve(options.max_duration ? static_cast<std::size_t>(*options.max_duration * 1000) + 16 : 60000);
+
+  int64_t deadline = monotonic_ns();
+  Duration period(0);
+  while (true) {
+    deadline += kCycleNs;
+    sleep_until_ns(deadline);
+    runner.latency_us().push_back(static_cast<double>(monotonic_ns() - deadline) * 1e-3);
+
+    const Command command = runner.call_controller(period);
+    runner.remember(command);
+    // The command counts only if it is back before the next cycle begins (the FCI's rule).
+    const int64_t late_cycles = (monotonic_ns() - deadline) / kCycleNs;
+    if (late_cycles == 0) {
+      runner.step(command, runner.network_delivers());
+    } else {
+      ++runner.report().overruns;
+      for (int64_t k = 0; k < late_cycles && !runner.done(); ++k) runner.step(command, false);
+      deadline += late_cycles * kCycleNs;   // those deadlines have passed
+    }
+    period = Duration(static_cast<uint64_t>(1 + late_cycles));
+    if (runner.done()) break;
+  }
+  return runner.finish();
+}
+
+}  // namespace
+
+CommandChannel::CommandChannel(const CommandFaults& faults) : faults_(faults), rng_(faults.seed) {}
+
+bool CommandChannel::delivers(uint64_t cycle) {
+  // Draw every random number every cycle so that one fault setting does not shift the others.
+  const double loss_draw = uniform_(rng_);
+  const double latency_us = faults_.latency_mean_us + faults_.latency_jitter_us * std::abs(normal_(rng_));
+  for (const CommandFaults::Burst& burst : faults_.bursts) {
+    const auto first = static_cast<uint64_t>(std::llround(burst.at / kDeltaT));
+    if (cycle >= first && cycle < first + static_cast<uint64_t>(burst.count)) return false;
+  }
+  if (loss_draw < faults_.loss_probability) return false;
+  return latency_us <= faults_.budget_us;
+}
+
+Percentiles percentiles(std::vector<double> samples) {
+  Percentiles p;
+  p.count = samples.size();
+  if (samples.empty()) return p;
+  std::sort(samples.begin(), samples.end());
+  const auto at = [&](double fraction) {
+    const auto index = static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(samples.size()))) - 1;
+    return samples[std::min(index, samples.size() - 1)];
+  };
+  p.p50 = at(0.5);
+  p.p99 = at(0.99);
+  p.p999 = at(0.999);
+  p.max = samples.back();
+  return p;
+}
+
+std::vector<std::string> enable_realtime_scheduling() {
+  std::vector<std::string> missing;
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) missing.push_back(std::string("mlockall: ") + std::strerror(errno));
+  sched_param param{};
+  param.sched_priority = sched_get_priority_max(SCHED_FIFO) - 1;
+  const int error = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+  if (error != 0) missing.push_back(std::string("SCHED_FIFO: ") + std::strerror(error));
+  return missing;
+}
+
+MotionResult run_motion(Emulator& emulator, ControlMode mode, const Controller& controller,
+                        const LoopOptions& options) {
+  emulator.start_motion(mode);
+  MotionRunner runner(emulator, controller, options);
+  return options.clock == Clock::kLockstep ? run_lockstep(runner) : run_realtime(runner, options);
+}
+
+}  // namespace csp::rt

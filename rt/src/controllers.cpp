@@ -1,0 +1,121 @@
+#include "csp/rt/controllers.hpp"
+
+#include <Eigen/Geometry>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+
+namespace csp::rt {
+namespace {
+
+Vector7 vector_of(const std::array<double, 7>& a) { return Vector7(a.data()); }
+
+// State shared by the built-ins: the robot's model, motion time, the start pose and the reference.
+struct ControllerContext {
+  explicit ControllerContext(const Emulator& emulator, const ControllerSpec& spec)
+      : model(emulator.internal_model()), spec(spec), q0(vector_of(emulator.state().q_d)) {}
+
+  // Advances time and evaluates the reference trajectory.
+  void advance(Duration period) {
+    time += period.toSec();
+    spec.trajectory.evaluate(q0, time, q_d, dq_d, ddq_d);
+  }
+
+  Model model;
+  Data data;
+  ControllerSpec spec;
+  Vector7 q0;
+  double time = 0.0;
+  Vector7 q_d, dq_d, ddq_d;
+};
+
+Command torque(const Vector7& tau) { return Command{tau, false}; }
+
+// tau = K (q_d - q) + D (dq_d - dq) [+ M(q) ddq_d + c(q, dq)]
+Command joint_impedance(ControllerContext& c, const RobotState& state) {
+  const Vector7 q = vector_of(state.q), dq = vector_of(state.dq);
+  Vector7 tau = c.spec.stiffness.cwiseProduct(c.q_d - q) + c.spec.damping.cwiseProduct(c.dq_d - dq);
+  if (c.spec.feedforward) {
+    Vector7 inverse_dynamics, gravity;
+    rnea(c.model, c.data, q, dq, c.ddq_d, inverse_dynamics);
+    gravity_torque(c.model, c.data, q, gravity);
+    tau += inverse_dynamics - gravity;   // the robot adds gravity itself
+  }
+  return torque(tau);
+}
+
+// libfranka's cartesian_impedance_control example: a spring-damper on K's pose (quaternion
+// orientation error), mapped by J^T, plus Coriolis.
+class CartesianImpedance {
+ public:
+  explicit CartesianImpedance(ControllerContext& c) : c_(c) {
+    forward_kinematics(c.model, c.data, c.q0);
+    const Transform& pose = frame_pose(c.data, Frame::kStiffness);
+    position_d_ = pose.translation;
+    orientation_d_ = Eigen::Quaterniond(pose.rotation);
+    stiffness_.setZero();
+    stiffness_.topLeftCorner<3, 3>().diagonal().setConstant(c.spec.translational_stiffness);
+    stiffness_.bottomRightCorner<3, 3>().diagonal().setConstant(c.spec.rotational_stiffness);
+    damping_ = 2.0 * stiffness_.cwiseSqrt();
+  }
+
+  Command operator()(const RobotState& state) {
+    const Vector7 q = vector_of(state.q), dq = vector_of(state.dq);
+    forward_kinematics(c_.model, c_.data, q);
+    const Transform& pose = frame_pose(c_.data, Frame::kStiffness);
+    zero_jacobian(c_.data, Frame::kStiffness, jacobian_);
+    Vector6 error;
+    error.head<3>() = pose.translation - position_d_;
+    Eigen::Quaterniond orientation(pose.rotation);
+    if (orientation_d_.coeffs().dot(orientation.coeffs()) < 0.0) orientation.coeffs() = -orientation.coeffs();
+    const Eigen::Quaterniond difference(orientation.inverse() * orientation_d_);
+    error.tail<3>() = -pose.rotation * Vector3(difference.x(), difference.y(), difference.z());
+    Vector7 coriolis;
+    coriolis_torque(c_.model, c_.data, q, dq, coriolis);
+    return torque(jacobian_.transpose() * (-stiffness_ * error - damping_ * (jacobian_ * dq)) + coriolis);
+  }
+
+ private:
+  ControllerContext& c_;
+  Vector3 position_d_;
+  Eigen::Quaterniond orientation_d_;
+  Matrix6 stiffness_, damping_;
+  Matrix6x7 jacobian_;
+};
+
+}  // namespace
+
+BuiltinController make_controller(const ControllerSpec& spec, const ControllerFaults& faults, const Emulator& emulator) {
+  auto context = std::make_shared<ControllerContext>(emulator, spec);
+  std::function<Command(const RobotState&)> law;
+  ControlMode mode = ControlMode::kTorque;
+  if (spec.type == "float") {
+    law = [context](const RobotState& s) { return torque(-context->spec.damping.cwiseProduct(vector_of(s.dq))); };
+  } else if (spec.type == "joint_impedance") {
+    law = [context](const RobotState& s) { return joint_impedance(*context, s); };
+  } else if (spec.type == "joint_position") {
+    mode = ControlMode::kJointPosition;
+    law = [context](const RobotState&) { return Command{context->q_d, false}; };
+  } else if (spec.type == "joint_velocity") {
+    mode = ControlMode::kJointVelocity;
+    law = [context](const RobotState&) { return Command{context->dq_d, false}; };
+  } else if (spec.type == "cartesian_impedance") {
+    auto impedance = std::make_shared<CartesianImpedance>(*context);
+    law = [context, impedance](const RobotState& s) { return (*impedance)(s); };
+  } else {
+    throw std::invalid_argument("unknown controller type `" + spec.type + "`");
+  }
+
+  Controller controller = [context, law, faults](const RobotState& state, Duration period) {
+    context->advance(period);
+    if (faults.throw_at && context->time >= *faults.throw_at - 1e-9)
+      throw std::runtime_error("scripted controller failure at t = " + std::to_string(context->time) + " s");
+    Command command = law(state);
+    if (faults.nan_at && context->time >= *faults.nan_at - 1e-9)
+      command.values[0] = std::numeric_limits<double>::quiet_NaN();
+    return command;
+  };
+  return {mode, controller};
+}
+
+}  // namespace csp::rt

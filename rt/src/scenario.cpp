@@ -1,0 +1,259 @@
+#include "csp/rt/scenario.hpp"
+
+#include <cmath>
+#include <filesystem>
+
+#include "csp/dynamics/yaml_field.hpp"
+
+namespace csp::rt {
+namespace {
+
+Vector7 non_negative7(const Field& f) {
+  const Vector7 v = f.vector<7>();
+  if ((v.array() < 0.0).any()) f.fail("7 non-negative numbers");
+  return v;
+}
+
+Vector6 non_negative6(const Field& f) {
+  const Vector6 v = f.vector<6>();
+  if ((v.array() < 0.0).any()) f.fail("6 non-negative numbers");
+  return v;
+}
+
+double positive(const Field& f) {
+  const double v = f.number();
+  if (v <= 0.0) f.fail("a positive number");
+  return v;
+}
+
+double non_negative(const Field& f) {
+  const double v = f.number();
+  if (v < 0.0) f.fail("a non-negative number");
+  return v;
+}
+
+RigidBodyInertia load(const Field& f) {
+  f.allow_only({"mass", "com", "inertia"});
+  RigidBodyInertia body;
+  body.mass = non_negative(f["mass"]);
+  if (f.has("com")) body.com = f["com"].vector<3>();
+  if (f.has("inertia")) {
+    const Vector6 v = f["inertia"].vector<6>();   // xx, xy, xz, yy, yz, zz about the CoM
+    body.inertia << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
+    if (body.mass > 0.0 && body.inertia != Matrix3::Zero() && !is_physical_inertia(body.inertia))
+      f["inertia"].fail("a physical inertia (positive definite, triangle inequality)");
+  }
+  return body;
+}
+
+// plant / robot_model: which named sets of the robot file, and the load.
+ModelOptions model_options(const Field& f, const std::string& end_effector, const std::string& joint_limits) {
+  ModelOptions options;
+  options.end_effector = end_effector;
+  options.joint_limits = joint_limits;
+  if (f.has("inertia")) options.inertia = f["inertia"].text();
+  if (f.has("friction")) options.friction = f["friction"].text();
+  if (f.has("load")) options.load = load(f["load"]);
+  return options;
+}
+
+ModelParameters build_model(const RobotConfig& robot, const ModelOptions& options, const Field& where) {
+  try {
+    return model_parameters(robot, options);
+  } catch (const ConfigError& e) {
+    where.fail(std::string("set names the robot file has; ") + e.what());
+  }
+}
+
+void read_trajectory(const Field& f, ExcitationTrajectory& trajectory) {
+  f.allow_only({"amplitude", "frequency_hz", "phase", "ramp"});
+  trajectory.amplitude = non_negative7(f["amplitude"]);
+  trajectory.frequency_hz = non_negative7(f["frequency_hz"]);
+  if (f.has("phase")) trajectory.phase = f["phase"].vector<7>();
+  if (f.has("ramp")) trajectory.ramp = non_negative(f["ramp"]);
+}
+
+void read_controller(const Field& f, ControllerSpec& c) {
+  f.allow_only({"type", "stiffness", "damping", "feedforward", "translational_stiffness", "rotational_stiffness",
+                "trajectory"});
+  c.type = f["type"].text();
+  if (c.type != "float" && c.type != "joint_impedance" && c.type != "joint_position" &&
+      c.type != "joint_velocity" && c.type != "cartesian_impedance")
+    f["type"].fail("float, joint_impedance, joint_position, joint_velocity or cartesian_impedance");
+  if (f.has("stiffness")) c.stiffness = non_negative7(f["stiffness"]);
+  if (f.has("damping")) c.damping = non_negative7(f["damping"]);
+  if (f.has("feedforward")) c.feedforward = f["feedforward"].boolean();
+  if (f.has("translational_stiffness")) c.translational_stiffness = non_negative(f["translational_stiffness"]);
+  if (f.has("rotational_stiffness")) c.rotational_stiffness = non_negative(f["rotational_stiffness"]);
+  if (f.has("trajectory")) read_trajectory(f["trajectory"], c.trajectory);
+  if (c.type == "joint_impedance" && !f.has("stiffness")) f.fail("`stiffness` for a joint_impedance controller");
+}
+
+void read_robot_settings(const Field& f, EmulatorSettings& s) {
+  f.allow_only({"substeps", "torque_loop_bandwidth_hz", "tau_ext_cutoff_hz", "power_limit", "gravity_compensation",
+                "tau_J_noise", "tau_J_bias", "joint_impedance", "collision_behavior"});
+  if (f.has("substeps")) {
+    const double n = f["substeps"].number();
+    if (n < 1 || n > 100 || n != std::floor(n)) f["substeps"].fail("a whole number from 1 to 100");
+    s.substeps = static_cast<int>(n);
+  }
+  if (f.has("torque_loop_bandwidth_hz")) s.torque_loop_bandwidth_hz = positive(f["torque_loop_bandwidth_hz"]);
+  if (f.has("tau_ext_cutoff_hz")) s.tau_ext_cutoff_hz = positive(f["tau_ext_cutoff_hz"]);
+  if (f.has("power_limit")) s.power_limit = positive(f["power_limit"]);
+  if (f.has("gravity_compensation")) s.gravity_compensation = f["gravity_compensation"].boolean();
+  if (f.has("tau_J_noise")) s.tau_J_noise = non_negative7(f["tau_J_noise"]);
+  if (f.has("tau_J_bias")) s.tau_J_bias = f["tau_J_bias"].vector<7>();
+  if (f.has("joint_impedance")) s.joint_stiffness = non_negative7(f["joint_impedance"]);
+  if (f.has("collision_behavior")) {
+    // libfranka's four-argument setCollisionBehavior: the same thresholds while accelerating and nominal.
+    const Field c = f["collision_behavior"];
+    c.allow_only({"lower_torque", "upper_torque", "lower_force", "upper_force"});
+    CollisionBehavior& b = s.collision;
+    b.lower_torque_acceleration = b.lower_torque_nominal = non_negative7(c["lower_torque"]);
+    b.upper_torque_acceleration = b.upper_torque_nominal = non_negative7(c["upper_torque"]);
+    b.lower_force_acceleration = b.lower_force_nominal = non_negative6(c["lower_force"]);
+    b.upper_force_acceleration = b.upper_force_nominal = non_negative6(c["upper_force"]);
+  }
+}
+
+void read_faults(const Field& f, Scenario& scenario) {
+  f.allow_only({"command_loss_probability", "latency_us", "lost_command_bursts", "controller_throws_at",
+                "controller_nan_at"});
+  CommandFaults& faults = scenario.command_faults;
+  if (f.has("command_loss_probability")) {
+    faults.loss_probability = f["command_loss_probability"].number();
+    if (faults.loss_probability < 0.0 || faults.loss_probability > 1.0)
+      f["command_loss_probability"].fail("a probability from 0 to 1");
+  }
+  if (f.has("latency_us")) {
+    const Field l = f["latency_us"];
+    l.allow_only({"mean", "jitter", "budget"});
+    faults.latency_mean_us = non_negative(l["mean"]);
+    if (l.has("jitter")) faults.latency_jitter_us = non_negative(l["jitter"]);
+    if (l.has("budget")) faults.budget_us = positive(l["budget"]);
+  }
+  if (f.has("lost_command_bursts")) {
+    const Field bursts = f["lost_command_bursts"];
+    for (std::size_t i = 0; i < bursts.sequence_size(); ++i) {
+      const Field b = bursts[i];
+      b.allow_only({"at", "count"});
+      const double count = b["count"].number();
+      if (count < 1 || count != std::floor(count)) b["count"].fail("a positive whole number");
+      faults.bursts.push_back({non_negative(b["at"]), static_cast<int>(count)});
+    }
+  }
+  if (f.has("controller_throws_at")) scenario.controller_faults.throw_at = non_negative(f["controller_throws_at"]);
+  if (f.has("controller_nan_at")) scenario.controller_faults.nan_at = non_negative(f["controller_nan_at"]);
+}
+
+ExternalWrench read_wrench(const Field& f) {
+  f.allow_only({"link", "point", "force", "moment", "start", "end", "ramp"});
+  ExternalWrench w;
+  const double link = f["link"].number();
+  if (link < 1 || link > kNumJoints || link != std::floor(link)) f["link"].fail("a link number from 1 to 7");
+  w.link = static_cast<int>(link);
+  if (f.has("point")) w.point = f["point"].vector<3>();
+  if (f.has("force")) w.force = f["force"].vector<3>();
+  if (f.has("moment")) w.moment = f["moment"].vector<3>();
+  w.start = non_negative(f["start"]);
+  w.end = f["end"].number();
+  if (w.end <= w.start) f["end"].fail("a time after `start`");
+  if (f.has("ramp")) w.ramp = non_negative(f["ramp"]);
+  return w;
+}
+
+}  // namespace
+
+void ExcitationTrajectory::evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
+  // Quintic ramp r(x) = 10x^3 - 15x^4 + 6x^5, x = t / ramp: r, r', r'' vanish at both ends but r(1) = 1.
+  double r = 1.0, dr = 0.0, ddr = 0.0;
+  if (ramp > 0.0 && t < ramp) {
+    const double x = t / ramp;
+    r = x * x * x * (10.0 - 15.0 * x + 6.0 * x * x);
+    dr = 30.0 * x * x * (1.0 - 2.0 * x + x * x) / ramp;
+    ddr = 60.0 * x * (1.0 - 3.0 * x + 2.0 * x * x) / (ramp * ramp);
+  }
+  for (int i = 0; i < kNumJoints; ++i) {
+    const double w = 2.0 * M_PI * frequency_hz[i];
+    const double s = amplitude[i] * (std::sin(w * t + phase[i]) - std::sin(phase[i]));
+    const double ds = amplitude[i] * w * std::cos(w * t + phase[i]);
+    const double dds = -amplitude[i] * w * w * std::sin(w * t + phase[i]);
+    q[i] = q0[i] + r * s;
+    dq[i] = dr * s + r * ds;
+    ddq[i] = ddr * s + 2.0 * dr * ds + r * dds;
+  }
+}
+
+Scenario load_scenario(const std::string& path) {
+  const YAML::Node root = load_yaml_file(path, "scenario file");
+  const Field top(root, path, "");
+  top.allow_only({"name", "robot", "end_effector", "joint_limits", "plant", "robot_model", "initial_q", "duration",
+                  "clock", "seed", "robot_settings", "controller", "faults", "external_wrenches"});
+  Scenario s;
+  s.path = path;
+  s.name = top["name"].text();
+
+  // The robot file is found relative to the scenario file.
+  const std::filesystem::path robot = top["robot"].text();
+  s.robot_file = (robot.is_absolute() ? robot : std::filesystem::path(path).parent_path() / robot).string();
+  const RobotConfig config = load_robot_config(s.robot_file);
+  const std::string end_effector = top.has("end_effector") ? top["end_effector"].text() : "none";
+  const std::string joint_limits = top.has("joint_limits") ? top["joint_limits"].text() : "";
+
+  const Field plant = top["plant"];
+  plant.allow_only({"inertia", "friction", "load", "armature"});
+  const ModelOptions plant_options = model_options(plant, end_effector, joint_limits);
+  s.emulator.plant = build_model(config, plant_options, plant);
+  if (!s.emulator.plant.physically_consistent) plant["inertia"].fail("a physically consistent inertial set for the plant");
+  if (plant.has("armature")) {
+    const Field a = plant["armature"];
+    a.allow_only({"values", "source"});
+    a["source"].text();   // every number carries its source
+    s.emulator.armature = non_negative7(a["values"]);
+  }
+
+  // The robot's own model: the plant's sets unless named; it is told the plant's load unless told otherwise.
+  ModelOptions internal_options = plant_options;
+  internal_options.friction = "none";
+  if (top.has("robot_model")) {
+    const Field internal = top["robot_model"];
+    internal.allow_only({"inertia", "load"});
+    if (internal.has("inertia")) internal_options.inertia = internal["inertia"].text();
+    if (internal.has("load")) internal_options.load = load(internal["load"]);
+    s.emulator.internal = build_model(config, internal_options, internal);
+  } else {
+    s.emulator.internal = build_model(config, internal_options, top);
+  }
+
+  s.emulator.q_initial = top["initial_q"].vector<7>();
+  const JointLimits& limits = s.emulator.plant.joint_limits;
+  for (int i = 0; i < kNumJoints; ++i)
+    if (s.emulator.q_initial[i] <= limits.q_min[i] || s.emulator.q_initial[i] >= limits.q_max[i])
+      top["initial_q"].fail("a pose inside the joint limits (joint " + std::to_string(i + 1) + " is not)");
+
+  s.duration = positive(top["duration"]);
+  if (top.has("clock")) {
+    const std::string clock = top["clock"].text();
+    if (clock != "lockstep" && clock != "realtime") top["clock"].fail("lockstep or realtime");
+    s.clock = clock == "lockstep" ? Clock::kLockstep : Clock::kRealtime;
+  }
+  if (top.has("seed")) {
+    const double seed = top["seed"].number();
+    if (seed < 0 || seed != std::floor(seed) || seed > 9.0e15) top["seed"].fail("a non-negative whole number");
+    s.seed = static_cast<uint64_t>(seed);
+  }
+  if (top.has("robot_settings")) read_robot_settings(top["robot_settings"], s.emulator);
+  read_controller(top["controller"], s.controller);
+  if (top.has("faults")) read_faults(top["faults"], s);
+  if (top.has("external_wrenches")) {
+    const Field wrenches = top["external_wrenches"];
+    for (std::size_t i = 0; i < wrenches.sequence_size(); ++i) s.emulator.external_wrenches.push_back(read_wrench(wrenches[i]));
+  }
+  s.emulator.seed = s.seed;
+  s.command_faults.seed = s.seed + 1;   // a stream of its own: noise settings do not shift command losses
+  return s;
+}
+
+std::string default_scenario_path() { return std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml"; }
+
+}  // namespace csp::rt
