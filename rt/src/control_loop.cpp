@@ -74,10 +74,10 @@ class MotionRunner {
   MotionResult finish() {
     MotionResult result;
     if (emulator_.in_motion()) {
-      // max_duration reached: end the motion as a controller returning MotionFinished would.
-      Command stop;
+      // max_duration reached: the controller's next command closes the motion, as if it had
+      // returned MotionFinished (a motion generator continues smoothly into it).
+      Command stop = call_controller(Duration(1));
       stop.motion_finished = true;
-      stop.values = last_values_;
       step(stop, true);
     }
     result.reflex = emulator_.state().robot_mode == RobotMode::kReflex;
@@ -89,7 +89,6 @@ class MotionRunner {
     return result;
   }
 
-  void remember(const Command& command) { last_values_ = command.values; }
   TimingReport& report() { return report_; }
   std::vector<double>& latency_us() { return latency_us_; }
 
@@ -108,14 +107,12 @@ class MotionRunner {
   CommandChannel channel_;
   TimingReport report_;
   std::vector<double> compute_us_, latency_us_;
-  Vector7 last_values_ = Vector7::Zero();
 };
 
 MotionResult run_lockstep(MotionRunner& runner) {
   Duration period(0);
   while (true) {
     const Command command = runner.call_controller(period);
-    runner.remember(command);
     runner.step(command, runner.network_delivers());
     period = Duration(1);
     if (runner.done()) break;
@@ -143,7 +140,6 @@ MotionResult run_realtime(MotionRunner& runner, const LoopOptions& options) {
     runner.latency_us().push_back(static_cast<double>(monotonic_ns() - deadline) * 1e-3);
 
     const Command command = runner.call_controller(period);
-    runner.remember(command);
     // The command counts only if it is back before the next cycle begins (the FCI's rule).
     const int64_t late_cycles = (monotonic_ns() - deadline) / kCycleNs;
     if (late_cycles == 0) {
