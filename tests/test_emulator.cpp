@@ -295,6 +295,35 @@ TEST(EmulatorTracking, ExcitationTrackedWithinBound) {
   }
 }
 
+// FR3: the velocity bound shrinks near a position limit. Joint 4 driven towards q_max trips
+// joint_velocity_violation below the fixed 2.62 rad/s, at the position-based bound.
+TEST(EmulatorReflex, Fr3PositionBasedVelocityLimit) {
+  rt::EmulatorSettings settings = matched_settings();
+  ModelOptions o;
+  o.end_effector = "hand";
+  settings.plant = settings.internal = model_parameters(load_robot_config(robot_file("fr3")), o);
+  settings.q_initial << 0.0, -0.785, 0.0, -0.6, 0.0, 1.57, 0.785;
+  settings.collision.upper_torque_nominal.setConstant(1e3);
+  settings.collision.upper_force_nominal.setConstant(1e3);
+  Emulator emulator(settings);
+  emulator.start_motion(ControlMode::kTorque);
+  Command command;
+  rt::RobotState before_trip;
+  for (int k = 0; k < 2000 && emulator.state().robot_mode == rt::RobotMode::kMove; ++k) {
+    before_trip = emulator.state();
+    command.values[3] = std::min(8.0, 0.9 * (k + 1));   // ramp within the torque-rate limit
+    emulator.step(&command);
+  }
+  ASSERT_EQ(emulator.state().robot_mode, rt::RobotMode::kReflex);
+  EXPECT_EQ(std::string(emulator.state().current_errors), "[joint_velocity_violation]");
+  const JointLimits& limits = settings.plant.joint_limits;
+  const double dq4 = emulator.state().dq[3];
+  EXPECT_LT(dq4, limits.dq_max[3]) << "tripped below the fixed limit";
+  EXPECT_GT(dq4, limits.dq_upper(q_of(emulator.state()))[3]);
+  EXPECT_LE(before_trip.dq[3], limits.dq_upper(q_of(before_trip))[3]);
+  EXPECT_LT(emulator.state().q[3], limits.q_max[3]) << "before reaching the position limit";
+}
+
 // ---------------------------------------------------------------------------------------------
 // Timing and faults
 
