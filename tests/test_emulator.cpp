@@ -61,6 +61,7 @@ std::vector<rt::RobotState> run_constant_torque(Emulator& emulator, const Vector
 
 // Classical RK4 of the plant alone: (M + armature) ddq = tau - c - g - friction, step h.
 struct PlantReference {
+  explicit PlantReference(const ModelParameters& parameters) : model(parameters) {}
   Model model;
   Vector7 armature = Vector7::Zero();
   Data data;
@@ -100,7 +101,7 @@ TEST(EmulatorIntegrator, ZeroTorqueFallMatchesFineRk4) {
   const auto states = run_constant_torque(emulator, Vector7::Zero(), 300);
   ASSERT_EQ(states.back().robot_mode, rt::RobotMode::kMove) << std::string(states.back().current_errors) << states.back().time.toMSec();
 
-  PlantReference reference{Model(settings.plant)};
+  PlantReference reference(settings.plant);
   Vector7 q = settings.q_initial, dq = Vector7::Zero();
   reference.integrate(q, dq, Vector7::Zero(), 0.3, 2e-5);
   const Vector7 fallen = q - settings.q_initial;
@@ -120,7 +121,7 @@ TEST(EmulatorIntegrator, TorqueStepResponseMatchesFineRk4) {
   tau.tail<3>().setConstant(0.15);
   const auto states = run_constant_torque(emulator, tau, 100);
 
-  PlantReference reference{Model(settings.plant)};
+  PlantReference reference(settings.plant);
   Vector7 q = settings.q_initial, dq = Vector7::Zero();
   const Vector7 tau_total = tau + gravity_of(Model(settings.internal), settings.q_initial);
   // The robot recomputes gravity every cycle; the reference holds the torque of the start pose,

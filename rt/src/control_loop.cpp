@@ -65,21 +65,18 @@ class MotionRunner {
 
   bool network_delivers() { return channel_.delivers(report_.cycles); }
 
-  bool done() const {
-    if (!emulator_.in_motion()) return true;   // reflex, or motion_finished was received
-    // The closing cycle in finish() is the last one of max_duration.
-    return options_.max_duration && static_cast<double>(report_.cycles + 1) * kDeltaT >= *options_.max_duration - 1e-9;
+  // Reflex, or motion_finished was received.
+  bool done() const { return !emulator_.in_motion(); }
+
+  // The controller's command of the last cycle of max_duration closes the motion, as if it had
+  // returned MotionFinished (a motion generator continues smoothly into it).
+  void close_at_max_duration(Command& command) const {
+    if (options_.max_duration && static_cast<double>(report_.cycles + 1) * kDeltaT >= *options_.max_duration - 1e-9)
+      command.motion_finished = true;
   }
 
   MotionResult finish() {
     MotionResult result;
-    if (emulator_.in_motion()) {
-      // max_duration reached: the controller's next command closes the motion, as if it had
-      // returned MotionFinished (a motion generator continues smoothly into it).
-      Command stop = call_controller(Duration(1));
-      stop.motion_finished = true;
-      step(stop, true);
-    }
     result.reflex = emulator_.state().robot_mode == RobotMode::kReflex;
     result.errors = emulator_.state().last_motion_errors;
     result.reason = emulator_.reflex_reason();
@@ -112,7 +109,8 @@ class MotionRunner {
 MotionResult run_lockstep(MotionRunner& runner) {
   Duration period(0);
   while (true) {
-    const Command command = runner.call_controller(period);
+    Command command = runner.call_controller(period);
+    runner.close_at_max_duration(command);
     runner.step(command, runner.network_delivers());
     period = Duration(1);
     if (runner.done()) break;
@@ -120,16 +118,18 @@ MotionResult run_lockstep(MotionRunner& runner) {
   return runner.finish();
 }
 
+// Real-time scheduling for the loop thread: an error under kEnforce, else a warning to report.
+std::optional<std::string> require_realtime(RealtimeConfig config) {
+  const std::vector<std::string> missing = enable_realtime_scheduling();
+  if (missing.empty()) return std::nullopt;
+  std::string text = "no real-time scheduling (" + missing.front();
+  for (std::size_t i = 1; i < missing.size(); ++i) text += "; " + missing[i];
+  text += ")";
+  if (config == RealtimeConfig::kEnforce) throw RealtimeError(text + "; use RealtimeConfig::kIgnore to run anyway");
+  return text + ": running without, timing will suffer";
+}
+
 MotionResult run_realtime(MotionRunner& runner, const LoopOptions& options) {
-  std::vector<std::string> missing = enable_realtime_scheduling();
-  if (!missing.empty()) {
-    std::string text = "no real-time scheduling (" + missing.front();
-    for (std::size_t i = 1; i < missing.size(); ++i) text += "; " + missing[i];
-    text += ")";
-    if (options.realtime_config == RealtimeConfig::kEnforce)
-      throw RealtimeError(text + "; use RealtimeConfig::kIgnore to run anyway");
-    runner.report().warnings.push_back(text + ": running without, timing will suffer");
-  }
   runner.latency_us().reserve(options.max_duration ? static_cast<std::size_t>(*options.max_duration * 1000) + 16 : 60000);
 
   int64_t deadline = monotonic_ns();
@@ -139,7 +139,8 @@ MotionResult run_realtime(MotionRunner& runner, const LoopOptions& options) {
     sleep_until_ns(deadline);
     runner.latency_us().push_back(static_cast<double>(monotonic_ns() - deadline) * 1e-3);
 
-    const Command command = runner.call_controller(period);
+    Command command = runner.call_controller(period);
+    runner.close_at_max_duration(command);
     // The command counts only if it is back before the next cycle begins (the FCI's rule).
     const int64_t late_cycles = (monotonic_ns() - deadline) / kCycleNs;
     if (late_cycles == 0) {
@@ -199,8 +200,11 @@ std::vector<std::string> enable_realtime_scheduling() {
 
 MotionResult run_motion(Emulator& emulator, ControlMode mode, const Controller& controller,
                         const LoopOptions& options) {
+  std::optional<std::string> warning;
+  if (options.clock == Clock::kRealtime) warning = require_realtime(options.realtime_config);   // before the motion
   emulator.start_motion(mode);
   MotionRunner runner(emulator, controller, options);
+  if (warning) runner.report().warnings.push_back(*warning);
   return options.clock == Clock::kLockstep ? run_lockstep(runner) : run_realtime(runner, options);
 }
 

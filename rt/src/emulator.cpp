@@ -12,6 +12,7 @@ namespace {
 constexpr double kLimitTolerance = 1e-9;   // round-off allowance on every limit check
 constexpr double kBrakingTimeConstant = 0.02;   // [s] reflex deceleration, then the brakes close
 constexpr double kBrakesClosedVelocity = 5e-3;  // [rad/s] every joint slower: brakes engage
+constexpr double kMaxBrakingTime = 0.5;         // [s] the brakes close at the latest after this
 constexpr double kAccelerationThreshold = 0.5;  // [rad/s^2] desired |ddq| above: "acceleration" thresholds
 constexpr double kWrenchDamping = 1e-2;         // damped pseudo-inverse of J^T (O_F_ext_hat_K)
 constexpr int kMaxConsecutiveLost = 20;         // FCI: 20 lost commands in a row end the motion
@@ -123,6 +124,7 @@ void Emulator::automatic_error_recovery() {
     // Brakes open; the robot holds where it stopped, its motors taking the load again.
     phase_ = Phase::kIdle;
     dq_.setZero();
+    dq_previous_.setZero();   // no phantom deceleration in the next external-torque estimate
     q_hold_ = q_;
     gravity_compensation_torque();
     tau_motor_ = gravity_internal_;
@@ -159,6 +161,7 @@ void Emulator::enter_reflex(const Errors& errors, const std::string& reason) {
   state_.last_motion_errors = errors;
   reflex_reason_ = reason.empty() ? std::string(errors) : reason;
   phase_ = Phase::kBraking;
+  braking_since_ = state_.time.toSec();
   mode_.reset();
   state_.robot_mode = RobotMode::kReflex;
   ++counters_.reflexes;
@@ -250,8 +253,11 @@ Errors Emulator::run_motion_generator(const Command* command) {
     q_c = q_c_ + dq_c * kDeltaT;
   } else if (*mode_ == ControlMode::kJointPosition) {
     q_c = command->values;
-    if (first_command_ && ((q_c - q_c_).array().abs() > limits.dq_max.array() * kDeltaT).any())
+    if (first_command_ && ((q_c - q_c_).array().abs() > limits.dq_max.array() * kDeltaT).any()) {
+      // The robot rejects the start pose itself; the jump is not also a velocity error.
       errors.set(Error::joint_position_motion_generator_start_pose_invalid);
+      return errors;
+    }
     dq_c = (q_c - q_c_) / kDeltaT;
   } else {
     dq_c = command->values;
@@ -350,7 +356,8 @@ void Emulator::integrate(const Vector7& user_torque) {
   // The sensor sits between rotor and link: the rotor's own inertia is not felt by it.
   tau_J_true_ = tau_motor_ - armature.cwiseProduct(ddq_);
 
-  if (braking && (dq_.array().abs() < kBrakesClosedVelocity).all()) {
+  if (braking && ((dq_.array().abs() < kBrakesClosedVelocity).all() ||
+                  state_.time.toSec() - braking_since_ >= kMaxBrakingTime - 1e-9)) {
     phase_ = Phase::kBraked;
     dq_.setZero();
   }

@@ -63,7 +63,7 @@ struct EmulatorSettings {
   int substeps = 2;                      // plant integration steps per 1 ms cycle
   double torque_loop_bandwidth_hz = 300.0;   // first-order inner torque loop
   double tau_ext_cutoff_hz = 30.0;       // low-pass of tau_ext_hat_filtered
-  double power_limit = 250.0;            // sum of positive joint powers tau_J dq [W]
+  double power_limit = 80.0;             // sum of positive joint powers tau_J dq [W] (ISO 10218-1 5.10.5)
   bool gravity_compensation = true;      // always on for a real robot; off only to test the plant
   Vector7 tau_J_noise = Vector7::Zero(); // standard deviation of the torque-sensor noise [N m]
   Vector7 tau_J_bias = Vector7::Zero();  // torque-sensor offset [N m]
@@ -147,6 +147,7 @@ class Emulator {
   std::optional<ControlMode> mode_;
   Phase phase_ = Phase::kIdle;
   std::string reflex_reason_;
+  double braking_since_ = 0.0;   // [s] when the last reflex began
 
   // Plant and inner torque loop
   Vector7 q_, dq_, ddq_, q_hold_, gravity_internal_, tau_motor_, tau_J_true_;
