@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "csp/rt/controllers.hpp"
+#include "kdl_peer.hpp"
 
 namespace {
 
@@ -35,14 +36,48 @@ void BM_LockstepCycle_JointImpedance(benchmark::State& state) { run_scenario(sta
 void BM_LockstepCycle_JointPosition(benchmark::State& state) { run_scenario(state, "joint_position"); }
 void BM_LockstepCycle_Float(benchmark::State& state) { run_scenario(state, "float"); }
 
-// The emulator's own share: one step with a fixed torque command, no controller.
+// The emulator's own share: one step with a zero torque command, no controller. The robot's model
+// is the plant's, so the gravity-compensated arm floats in place and every step does the full work
+// (a drifting arm would end in a reflex and stand on its brakes).
 void BM_EmulatorStep(benchmark::State& state) {
   rt::Scenario scenario = rt::load_scenario(rt::default_scenario_path());
   scenario.emulator.external_wrenches.clear();
+  scenario.emulator.internal = scenario.emulator.plant;
   rt::Emulator emulator(scenario.emulator);
   emulator.start_motion(rt::ControlMode::kTorque);
   const rt::Command command{Vector7::Zero(), false};
   for (auto _ : state) emulator.step(&command);
+  if (!emulator.in_motion()) state.SkipWithError(emulator.reflex_reason().c_str());
+  state.SetItemsProcessed(state.iterations());
+}
+
+// Peer: the model computations of one emulator cycle done with KDL's solvers (two forward-dynamics
+// substeps with friction, the gravity compensation, the expected torque by RNEA, the EE pose and
+// Jacobian), without the emulator's bookkeeping. The twin of BM_EmulatorStep.
+void BM_EmulatorStep_KDL(benchmark::State& state) {
+  rt::Scenario scenario = rt::load_scenario(rt::default_scenario_path());
+  const Model plant(scenario.emulator.plant);
+  test::KdlPeer kdl(plant);
+  Vector7 q = scenario.emulator.q_initial, dq = Vector7::Zero();
+  const Vector7 tau = kdl.gravity(q);
+  const double h = rt::kDeltaT / scenario.emulator.substeps;
+  for (auto _ : state) {
+    Vector7 gravity = kdl.gravity(q);
+    for (int s = 0; s < scenario.emulator.substeps; ++s) {
+      const Vector7 ddq = kdl.forward_dynamics(q, dq, tau - friction_torque(plant.parameters().friction, dq));
+      dq += h * ddq;
+      q += h * dq;
+    }
+    Vector7 expected = kdl.rnea(q, dq, Vector7::Zero());
+    Matrix6x7 jacobian = kdl.ee_jacobian(q);
+    Transform pose = kdl.ee_pose(q);
+    benchmark::DoNotOptimize(gravity);
+    benchmark::DoNotOptimize(expected);
+    benchmark::DoNotOptimize(jacobian);
+    benchmark::DoNotOptimize(pose);
+    q = scenario.emulator.q_initial;   // stay at the same state, as the CSP twin does at rest
+    dq.setZero();
+  }
   state.SetItemsProcessed(state.iterations());
 }
 
@@ -50,6 +85,7 @@ BENCHMARK(BM_LockstepCycle_JointImpedance)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LockstepCycle_JointPosition)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LockstepCycle_Float)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_EmulatorStep)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_EmulatorStep_KDL)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

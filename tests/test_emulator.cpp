@@ -2,6 +2,7 @@
 // scenario files, checked against independent references (a fine RK4 integration of the plant,
 // energy, the applied wrench, the scenario's reference trajectory).
 #include <fstream>
+#include <memory>
 #include <sstream>
 
 #include "csp/rt/controllers.hpp"
@@ -388,6 +389,27 @@ TEST(EmulatorDeterminism, SameSeedSameLogBytes) {
   EXPECT_EQ(std::count(a.begin(), a.end(), '\n'), 2001) << "header + one row per cycle";
 }
 
+// The same inputs give the same bits wherever the emulator lives in memory (Eigen's
+// address-dependent vectorization is off, see CMakeLists.txt): a stack and heap objects after
+// allocations of various sizes.
+TEST(EmulatorDeterminism, IndependentOfMemoryPlacement) {
+  const rt::Scenario scenario = default_scenario();
+  Command command;
+  command.values[3] = 0.5;
+  Emulator reference(scenario.emulator);
+  reference.start_motion(ControlMode::kTorque);
+  for (int k = 0; k < 300; ++k) reference.step(&command);
+  std::vector<std::unique_ptr<char[]>> padding;
+  for (int offset = 1; offset <= 8; ++offset) {
+    padding.emplace_back(new char[static_cast<std::size_t>(offset) * 24]);
+    auto emulator = std::make_unique<Emulator>(scenario.emulator);
+    emulator->start_motion(ControlMode::kTorque);
+    for (int k = 0; k < 300; ++k) emulator->step(&command);
+    EXPECT_EQ(emulator->state().q, reference.state().q) << "offset " << offset;
+    EXPECT_EQ(emulator->state().tau_ext_hat_filtered, reference.state().tau_ext_hat_filtered) << "offset " << offset;
+  }
+}
+
 // A controller that throws or returns NaN ends in a reflex, and the log holds every cycle up to it.
 TEST(EmulatorFaults, ControllerFailureEndsInReflexWithCompleteLog) {
   for (const bool nan : {false, true}) {
@@ -458,6 +480,23 @@ TEST(EmulatorScenario, DefaultLoads) {
   EXPECT_EQ(s.controller.type, "joint_impedance");
   EXPECT_FALSE(s.emulator.internal.physically_consistent) << "the robot's model is libfranka's fit";
   EXPECT_TRUE(s.emulator.plant.physically_consistent);
+}
+
+// Every shipped scenario loads and runs its first 0.2 s.
+TEST(EmulatorScenario, ShippedScenariosLoadAndRun) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(CSP_SOURCE_DIR) + "/configs/scenarios")) {
+    if (entry.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(entry.path().string());
+    const rt::Scenario scenario = rt::load_scenario(entry.path().string());
+    Emulator emulator(scenario.emulator);
+    const auto builtin = rt::make_controller(scenario.controller, scenario.controller_faults, emulator);
+    rt::LoopOptions options;
+    options.max_duration = 0.2;
+    EXPECT_FALSE(rt::run_motion(emulator, builtin.mode, builtin.controller, options).reflex);
+    ++count;
+  }
+  EXPECT_GE(count, 3);
 }
 
 TEST(EmulatorScenario, BadFilesRejectedClearly) {

@@ -63,6 +63,8 @@ Emulator::Emulator(const EmulatorSettings& settings)
   ddq_c_.setZero();
   last_user_torque_.setZero();
   dq_previous_.setZero();
+  tau_J_measured_previous_ = tau_J_true_ + settings_.tau_J_bias;   // dtau_J = 0 at rest
+  tau_ext_filtered_.setZero();
   state_.robot_mode = RobotMode::kIdle;
   update_sensors_and_estimates();
   tau_ext_filtered_ = tau_ext_raw_;   // the arm has been standing: the filter has settled
