@@ -74,4 +74,20 @@ Model ModelArguments::build() const {
   return Model(model_parameters(load_robot_config(robot), options));
 }
 
+void ScenarioArguments::add_to(CLI::App& command, const std::string& clock_help) {
+  command.add_option("scenario", scenario, "Scenario file (default: configs/scenarios/default.yaml)");
+  command.add_option("--clock", clock, clock_help)->check(CLI::IsMember({"lockstep", "realtime"}));
+  command.add_option("--duration", duration, "Override the scenario's duration [s]");
+}
+
+rt::Scenario ScenarioArguments::load() const {
+  rt::Scenario s = rt::load_scenario(scenario.empty() ? rt::default_scenario_path() : scenario);
+  if (duration) {
+    if (!(*duration > 0.0) || !std::isfinite(*duration)) throw UsageError("--duration: expected a positive number of seconds");
+    s.duration = *duration;
+  }
+  if (!clock.empty()) s.clock = clock == "realtime" ? rt::Clock::kRealtime : rt::Clock::kLockstep;
+  return s;
+}
+
 }  // namespace csp::cli

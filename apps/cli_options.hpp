@@ -1,6 +1,7 @@
 // Command-line pieces shared by the csp subcommands.
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -8,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "csp/dynamics/robot_config.hpp"
+#include "csp/rt/scenario.hpp"
 
 namespace csp::cli {
 
@@ -32,6 +34,17 @@ struct ModelArguments {
   void add_to(CLI::App& command);
   // Loads the robot file and builds the model; throws ConfigError or UsageError.
   Model build() const;
+};
+
+// The scenario options shared by `csp emulate` and `csp serve`: [SCENARIO] --clock --duration.
+struct ScenarioArguments {
+  std::string scenario;   // empty: configs/scenarios/default.yaml
+  std::string clock;      // empty: the scenario's
+  std::optional<double> duration;
+
+  void add_to(CLI::App& command, const std::string& clock_help);
+  // The scenario file with --clock and --duration applied (UsageError on a bad duration).
+  rt::Scenario load() const;
 };
 
 }  // namespace csp::cli

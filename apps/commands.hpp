@@ -17,6 +17,9 @@ Command add_model_command(CLI::App& app);
 Command add_workspace_command(CLI::App& app);
 Command add_demo_command(CLI::App& app);
 Command add_emulate_command(CLI::App& app);
+Command add_serve_command(CLI::App& app);
+Command add_replay_command(CLI::App& app);
+Command add_log_command(CLI::App& app);
 
 struct WorkspaceArguments {
   ModelArguments model;

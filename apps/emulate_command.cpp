@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "csp/bridge/lcm_log.hpp"
 #include "csp/rt/controllers.hpp"
 #include "csp/rt/csv_log.hpp"
 
@@ -14,11 +15,10 @@ namespace csp::cli {
 namespace {
 
 struct EmulateArguments {
-  std::string scenario;
-  std::optional<double> duration;
+  ScenarioArguments scenario;
   std::optional<long long> seed;
-  std::string clock;
   std::string log;
+  std::string lcm_log;
 };
 
 // Tracking error of q against the scenario's reference trajectory, and the largest estimated
@@ -65,24 +65,22 @@ void print_percentiles(const char* name, const rt::Percentiles& p) {
 }
 
 int run_emulate(const EmulateArguments& args) {
-  rt::Scenario scenario = rt::load_scenario(args.scenario.empty() ? rt::default_scenario_path() : args.scenario);
-  if (args.duration) {
-    if (!(*args.duration > 0.0) || !std::isfinite(*args.duration)) throw UsageError("--duration: expected a positive number of seconds");
-    scenario.duration = *args.duration;
-  }
+  rt::Scenario scenario = args.scenario.load();
   if (args.seed) {
     if (*args.seed < 0) throw UsageError("--seed: expected a non-negative whole number");
     scenario.seed = static_cast<uint64_t>(*args.seed);
     scenario.emulator.seed = scenario.seed;
     scenario.command_faults.seed = scenario.seed + 1;
   }
-  if (!args.clock.empty()) scenario.clock = args.clock == "realtime" ? rt::Clock::kRealtime : rt::Clock::kLockstep;
 
   rt::Emulator emulator(scenario.emulator);
   const rt::BuiltinController builtin = rt::make_controller(scenario.controller, scenario.controller_faults, emulator);
   std::unique_ptr<rt::CsvLog> log;
   if (!args.log.empty()) log = std::make_unique<rt::CsvLog>(args.log);
   if (log) log->write(emulator.state(), rt::CycleInfo{});   // the state the motion starts from
+  std::unique_ptr<bridge::EmulateLogRecorder> lcm_log;
+  if (!args.lcm_log.empty())
+    lcm_log = std::make_unique<bridge::EmulateLogRecorder>(args.lcm_log, scenario, emulator, builtin.mode);
 
   Summary summary(scenario.controller.trajectory, Vector7(emulator.state().q_d.data()));
   const uint64_t start_ms = emulator.state().time.toMSec();
@@ -92,6 +90,7 @@ int run_emulate(const EmulateArguments& args) {
   options.max_duration = scenario.duration;
   options.observer = [&](const rt::RobotState& state, const rt::CycleInfo& cycle) {
     if (log) log->write(state, cycle);
+    if (lcm_log) lcm_log->record(state, cycle);
     summary.add(state, static_cast<double>(state.time.toMSec() - start_ms) * 1e-3);
   };
 
@@ -119,6 +118,8 @@ int run_emulate(const EmulateArguments& args) {
   if (scenario.clock == rt::Clock::kRealtime)
     std::printf("  overruns %llu\n", static_cast<unsigned long long>(result.timing.overruns));
   if (log) std::printf("  log: %s (%llu rows)\n", log->path().c_str(), static_cast<unsigned long long>(log->rows()));
+  if (lcm_log)
+    std::printf("  LCM log: %s (%llu events)\n", args.lcm_log.c_str(), static_cast<unsigned long long>(lcm_log->log().events()));
 
   const rt::RobotState& state = emulator.state();
   if (!failure.empty() || state.robot_mode == rt::RobotMode::kReflex) {
@@ -135,12 +136,10 @@ int run_emulate(const EmulateArguments& args) {
 Command add_emulate_command(CLI::App& app) {
   auto args = std::make_shared<EmulateArguments>();
   CLI::App* cmd = app.add_subcommand("emulate", "Run a scenario on the emulated 1 kHz robot (configs/scenarios/)");
-  cmd->add_option("scenario", args->scenario, "Scenario file (default: configs/scenarios/default.yaml)");
-  cmd->add_option("--duration", args->duration, "Override the scenario's duration [s]");
+  args->scenario.add_to(*cmd, "lockstep (simulated time) or realtime (1 kHz wall clock)");
   cmd->add_option("--seed", args->seed, "Override the scenario's seed (sensor noise, command losses)");
-  cmd->add_option("--clock", args->clock, "lockstep (simulated time) or realtime (1 kHz wall clock)")
-      ->check(CLI::IsMember({"lockstep", "realtime"}));
   cmd->add_option("--log", args->log, "Write the per-cycle CSV log to this file");
+  cmd->add_option("--lcm-log", args->lcm_log, "Record the run as an LCM log (csp replay, csp log export, lcm-spy)");
   return [args] { return run_emulate(*args); };
 }
 

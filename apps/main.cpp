@@ -20,6 +20,9 @@ int main(int argc, char** argv) {
   add(add_workspace_command);
   add(add_demo_command);
   add(add_emulate_command);
+  add(add_serve_command);
+  add(add_replay_command);
+  add(add_log_command);
 
   // CLI11 would report an unknown command as a missing one; name it instead.
   std::string known;

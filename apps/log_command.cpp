@@ -1,0 +1,45 @@
+// csp log export / import: LCM logs <-> the CSV layout of the real Panda data.
+#include <cstdio>
+#include <memory>
+
+#include "commands.hpp"
+#include "csp/bridge/csv_convert.hpp"
+
+namespace csp::cli {
+namespace {
+
+struct LogArguments {
+  std::string input, out;
+  std::string channel = "CSP_STATE";
+};
+
+}  // namespace
+
+Command add_log_command(CLI::App& app) {
+  auto args = std::make_shared<LogArguments>();
+  CLI::App* cmd = app.add_subcommand("log", "Convert LCM logs to and from the real robot's CSV layout");
+  cmd->require_subcommand(1);
+  CLI::App* to_csv = cmd->add_subcommand("export", "Write the robot states of an LCM log as CSV");
+  to_csv->add_option("log", args->input, "LCM log file")->required();
+  CLI::App* from_csv = cmd->add_subcommand("import", "Turn a real-robot CSV (t, q, dq, tau_J[, tau_J_d]) into an LCM log");
+  from_csv->add_option("csv", args->input, "CSV file")->required();
+  for (CLI::App* sub : {to_csv, from_csv}) {
+    sub->add_option("--out", args->out, "Output file")->required();
+    sub->add_option("--channel", args->channel, "Channel of the robot states")->capture_default_str();
+  }
+  return [args, to_csv] {
+    if (to_csv->parsed()) {
+      const bridge::ExportReport r = bridge::export_csv(args->input, args->out, args->channel);
+      std::printf("csp log export: %llu rows to %s (%llu repeated states skipped, %llu undecodable events)\n",
+                  static_cast<unsigned long long>(r.rows), args->out.c_str(), static_cast<unsigned long long>(r.repeated),
+                  static_cast<unsigned long long>(r.rejected));
+      if (r.rows == 0) throw std::runtime_error(args->input + ": no robot_state_t on channel " + args->channel);
+      return 0;
+    }
+    const uint64_t rows = bridge::import_csv(args->input, args->out, args->channel);
+    std::printf("csp log import: %llu states to %s\n", static_cast<unsigned long long>(rows), args->out.c_str());
+    return 0;
+  };
+}
+
+}  // namespace csp::cli

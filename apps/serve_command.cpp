@@ -1,0 +1,89 @@
+// csp serve: the emulated robot on an LCM bus for a controller in another process
+// (docs/bridge.md); optionally records the session as an LCM log.
+#include <atomic>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <optional>
+
+#include "commands.hpp"
+#include "csp/bridge/serve.hpp"
+
+namespace csp::cli {
+namespace {
+
+std::atomic<bool> interrupted{false};
+
+struct ServeArguments {
+  ScenarioArguments scenario;
+  std::string lcm_url = bridge::kDefaultLcmUrl;
+  std::string prefix;
+  std::string log;
+  double lockstep_timeout = 1.0;
+  bool wait = false;
+};
+
+int run_serve(const ServeArguments& args) {
+  const rt::Scenario scenario = args.scenario.load();
+  bridge::ServeOptions options;
+  options.clock = scenario.clock;
+  options.duration = scenario.duration;
+  if (!(args.lockstep_timeout > 0.0)) throw UsageError("--lockstep-timeout: expected a positive number of seconds");
+  options.lcm_url = args.lcm_url;
+  options.channel_prefix = args.prefix;
+  options.log_path = args.log;
+  options.lockstep_timeout = args.lockstep_timeout;
+  options.wait_for_controller = args.wait;
+  options.stop = &interrupted;
+  // Ctrl-C ends the run cleanly: the log keeps every cycle run.
+  std::signal(SIGINT, [](int) { interrupted = true; });
+  std::signal(SIGTERM, [](int) { interrupted = true; });
+
+  std::printf("csp serve: %s (%s), %s clock, %.3f s on %s, channels %sCSP_*\n", scenario.name.c_str(), scenario.path.c_str(),
+              options.clock == rt::Clock::kLockstep ? "lockstep" : "real-time", options.duration, options.lcm_url.c_str(),
+              options.channel_prefix.c_str());
+  std::fflush(stdout);
+  const bridge::ServeReport r = bridge::serve(scenario, options);
+
+  const bridge::ServerCounters& c = r.counters;
+  std::printf("  ran %llu cycles in %.3f s (%.0f cycles/s)%s\n", static_cast<unsigned long long>(r.cycles), r.wall_seconds,
+              static_cast<double>(r.cycles) / r.wall_seconds, interrupted ? ", interrupted" : "");
+  std::printf("  sessions %llu, motion cycles %llu, lost commands %llu (longest run %d), reflexes %llu\n",
+              static_cast<unsigned long long>(c.sessions), static_cast<unsigned long long>(r.emulator.motion_cycles),
+              static_cast<unsigned long long>(r.emulator.lost_commands), r.emulator.max_consecutive_lost,
+              static_cast<unsigned long long>(r.emulator.reflexes));
+  std::printf("  rejected messages: fingerprint %llu, truncated %llu, oversized %llu, stale %llu, wrong mode %llu, "
+              "no session %llu; non-finite commands %llu, refused requests %llu\n",
+              static_cast<unsigned long long>(c.rejected_fingerprint), static_cast<unsigned long long>(c.rejected_truncated),
+              static_cast<unsigned long long>(c.rejected_oversized), static_cast<unsigned long long>(c.rejected_stale),
+              static_cast<unsigned long long>(c.rejected_wrong_mode), static_cast<unsigned long long>(c.rejected_no_session),
+              static_cast<unsigned long long>(c.non_finite_commands), static_cast<unsigned long long>(c.refused_requests));
+  if (r.round_trip_us.count > 0)
+    std::printf("  round trip state -> command: p50 %.1f  p99 %.1f  max %.1f us (%zu commands)\n", r.round_trip_us.p50,
+                r.round_trip_us.p99, r.round_trip_us.max, r.round_trip_us.count);
+  if (options.clock == rt::Clock::kRealtime) std::printf("  overruns %llu\n", static_cast<unsigned long long>(r.overruns));
+  for (const std::string& warning : r.warnings) std::printf("  warning: %s\n", warning.c_str());
+  if (!r.last_reflex.empty()) std::printf("  last reflex: %s\n", r.last_reflex.c_str());
+  if (!args.log.empty())
+    std::printf("  log: %s (%llu events, %llu states)\n", args.log.c_str(), static_cast<unsigned long long>(r.log_events),
+                static_cast<unsigned long long>(r.state_messages));
+  return 0;
+}
+
+}  // namespace
+
+Command add_serve_command(CLI::App& app) {
+  auto args = std::make_shared<ServeArguments>();
+  CLI::App* cmd = app.add_subcommand("serve", "Run a scenario's robot on LCM for an external controller (docs/bridge.md)");
+  args->scenario.add_to(*cmd, "lockstep (each cycle waits for its command) or realtime (1 kHz wall clock)");
+  cmd->add_option("--lcm-url", args->lcm_url, "LCM provider URL")->capture_default_str();
+  cmd->add_option("--prefix", args->prefix, "Prefix of every channel name (several robots on one bus)");
+  cmd->add_option("--log", args->log, "Record the session as an LCM log file");
+  cmd->add_option("--lockstep-timeout", args->lockstep_timeout, "Lockstep: how long a cycle waits for its command [s]")
+      ->capture_default_str();
+  cmd->add_flag("--wait", args->wait, "Lockstep: hold the first cycle until a controller starts a session");
+  return [args] { return run_serve(*args); };
+}
+
+}  // namespace csp::cli

@@ -1,0 +1,276 @@
+#include "csp/bridge/messages.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+namespace csp::bridge {
+namespace {
+
+// X(name): every array field of franka::RobotState, the same name in the message.
+#define CSP_STATE_ARRAYS(X)                                                                              \
+  X(O_T_EE) X(O_T_EE_d) X(F_T_EE) X(F_T_NE) X(NE_T_EE) X(EE_T_K) X(I_ee) X(F_x_Cee) X(I_load) X(F_x_Cload) \
+  X(I_total) X(F_x_Ctotal) X(elbow) X(elbow_d) X(elbow_c) X(delbow_c) X(ddelbow_c) X(tau_J) X(tau_J_d)   \
+  X(dtau_J) X(q) X(q_d) X(dq) X(dq_d) X(ddq_d) X(joint_contact) X(cartesian_contact) X(joint_collision)   \
+  X(cartesian_collision) X(tau_ext_hat_filtered) X(O_F_ext_hat_K) X(K_F_ext_hat_K) X(O_dP_EE_d) X(O_ddP_O) \
+  X(O_T_EE_c) X(O_dP_EE_c) X(O_ddP_EE_c) X(theta) X(dtheta)
+// X(name): the double fields, the same name in the message.
+#define CSP_STATE_SCALARS(X) X(m_ee) X(m_load) X(m_total) X(control_command_success_rate)
+
+template <typename From, typename To>
+void copy(const From& from, To& to) {
+  static_assert(std::size(From{}) == std::size(To{}));
+  std::copy(std::begin(from), std::end(from), std::begin(to));
+}
+
+void errors_to_message(const rt::Errors& errors, int8_t (&out)[rt::kNumErrors]) {
+  for (int i = 0; i < rt::kNumErrors; ++i) out[i] = errors.errors()[i] ? 1 : 0;
+}
+
+rt::Errors errors_from_message(const int8_t (&in)[rt::kNumErrors]) {
+  std::array<bool, rt::kNumErrors> errors{};
+  for (int i = 0; i < rt::kNumErrors; ++i) errors[i] = in[i] != 0;
+  return rt::Errors(errors);
+}
+
+int64_t big_endian_int64(const void* data) {
+  const auto* b = static_cast<const uint8_t*>(data);
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | b[i];
+  return static_cast<int64_t>(v);
+}
+
+template <typename T>
+bool has_fingerprint(const void* data, int size) {
+  return size >= 8 && big_endian_int64(data) == T::getHash();
+}
+
+template <typename T>
+Rejection decode_command_as(const void* data, int size, rt::ControlMode mode, ReceivedCommand& out) {
+  T message;
+  const Rejection rejection = decode_exact(data, size, message);
+  if (rejection != Rejection::kNone) return rejection;
+  out.mode = mode;
+  out.message_id = message.message_id;
+  if constexpr (std::is_same_v<T, torque_command_t>) out.command.values = Vector7(message.tau_J);
+  if constexpr (std::is_same_v<T, joint_position_command_t>) out.command.values = Vector7(message.q);
+  if constexpr (std::is_same_v<T, joint_velocity_command_t>) out.command.values = Vector7(message.dq);
+  out.command.motion_finished = message.motion_finished != 0;
+  return Rejection::kNone;
+}
+
+template <typename T>
+std::vector<uint8_t> encode_command_as(int64_t message_id, const rt::Command& command, int64_t utime, double (&values)[7], T& message) {
+  message.utime = utime;
+  message.message_id = message_id;
+  std::copy(command.values.data(), command.values.data() + kNumJoints, values);
+  message.motion_finished = command.motion_finished ? 1 : 0;
+  return encode(message);
+}
+
+// A 4x4 column-major pose; throws if it is not a finite rigid transform.
+Transform transform_from(const double (&values)[16], const char* operation) {
+  const Eigen::Map<const Eigen::Matrix4d> m(values);
+  Transform t;
+  t.rotation = m.topLeftCorner<3, 3>();
+  t.translation = m.topRightCorner<3, 1>();
+  const bool rigid = m.allFinite() && m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
+                     (t.rotation.transpose() * t.rotation).isApprox(Matrix3::Identity(), 1e-6) && t.rotation.determinant() > 0.0;
+  if (!rigid) throw std::invalid_argument(std::string(operation) + ": expected a rigid transform (4x4 column-major, finite)");
+  return t;
+}
+
+}  // namespace
+
+Channels::Channels(const std::string& p)
+    : prefix(p),
+      state(p + "CSP_STATE"),
+      command(p + "CSP_COMMAND"),
+      config(p + "CSP_CONFIG"),
+      config_reply(p + "CSP_CONFIG_REPLY"),
+      status(p + "CSP_STATUS"),
+      scenario(p + "CSP_SCENARIO"),
+      event(p + "CSP_EVENT") {}
+
+int64_t now_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+robot_state_t to_message(const rt::RobotState& s, int64_t utime, bool command_received) {
+  robot_state_t m{};
+  m.utime = utime;
+  m.message_id = static_cast<int64_t>(s.time.toMSec());
+  m.command_received = command_received ? 1 : 0;
+#define CSP_TO(name) copy(s.name, m.name);
+  CSP_STATE_ARRAYS(CSP_TO)
+#undef CSP_TO
+#define CSP_TO(name) m.name = s.name;
+  CSP_STATE_SCALARS(CSP_TO)
+#undef CSP_TO
+  errors_to_message(s.current_errors, m.current_errors);
+  errors_to_message(s.last_motion_errors, m.last_motion_errors);
+  m.robot_mode = static_cast<int8_t>(s.robot_mode);
+  m.time = static_cast<int64_t>(s.time.toMSec());
+  return m;
+}
+
+rt::RobotState from_message(const robot_state_t& m) {
+  rt::RobotState s;
+#define CSP_FROM(name) copy(m.name, s.name);
+  CSP_STATE_ARRAYS(CSP_FROM)
+#undef CSP_FROM
+#define CSP_FROM(name) s.name = m.name;
+  CSP_STATE_SCALARS(CSP_FROM)
+#undef CSP_FROM
+  s.current_errors = errors_from_message(m.current_errors);
+  s.last_motion_errors = errors_from_message(m.last_motion_errors);
+  const bool known_mode = m.robot_mode >= robot_state_t::MODE_OTHER && m.robot_mode <= robot_state_t::MODE_AUTOMATIC_ERROR_RECOVERY;
+  s.robot_mode = known_mode ? static_cast<rt::RobotMode>(m.robot_mode) : rt::RobotMode::kOther;
+  s.time = rt::Duration(static_cast<uint64_t>(std::max<int64_t>(m.time, 0)));
+  return s;
+}
+
+double state_difference(const robot_state_t& a, const robot_state_t& b, std::string& field) {
+  field.clear();
+  double difference = 0.0;
+  const auto compare = [&](const char* name, const double* x, const double* y, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      // Bit for bit: NaN equals NaN, -0 differs from +0.
+      if (std::memcmp(&x[i], &y[i], sizeof(double)) == 0) continue;
+      if (field.empty()) field = name;
+      const double d = std::abs(x[i] - y[i]);
+      difference = std::max(difference, std::isnan(d) || d == 0.0 ? std::numeric_limits<double>::min() : d);
+    }
+  };
+#define CSP_COMPARE(name) compare(#name, a.name, b.name, std::size(a.name));
+  CSP_STATE_ARRAYS(CSP_COMPARE)
+#undef CSP_COMPARE
+#define CSP_COMPARE(name) compare(#name, &a.name, &b.name, 1);
+  CSP_STATE_SCALARS(CSP_COMPARE)
+#undef CSP_COMPARE
+  const auto flag = [&](const char* name, bool same) {
+    if (same) return;
+    if (field.empty()) field = name;
+    difference = std::numeric_limits<double>::infinity();
+  };
+  flag("current_errors", std::equal(std::begin(a.current_errors), std::end(a.current_errors), std::begin(b.current_errors)));
+  flag("last_motion_errors", std::equal(std::begin(a.last_motion_errors), std::end(a.last_motion_errors), std::begin(b.last_motion_errors)));
+  flag("robot_mode", a.robot_mode == b.robot_mode);
+  flag("message_id", a.message_id == b.message_id && a.time == b.time);
+  flag("command_received", a.command_received == b.command_received);
+  return difference;
+}
+
+const char* rejection_name(Rejection rejection) {
+  switch (rejection) {
+    case Rejection::kNone: return "accepted";
+    case Rejection::kFingerprint: return "unknown type (fingerprint mismatch)";
+    case Rejection::kTruncated: return "truncated";
+    case Rejection::kOversized: return "oversized";
+  }
+  return "unknown";
+}
+
+template <typename T>
+Rejection decode_exact(const void* data, int size, T& out) {
+  if (size >= 8 && !has_fingerprint<T>(data, size)) return Rejection::kFingerprint;
+  if (size < 8 || out.decode(data, 0, size) < 0) return Rejection::kTruncated;
+  if (size != out.getEncodedSize()) return Rejection::kOversized;
+  return Rejection::kNone;
+}
+
+template Rejection decode_exact(const void*, int, robot_state_t&);
+template Rejection decode_exact(const void*, int, config_request_t&);
+template Rejection decode_exact(const void*, int, config_reply_t&);
+template Rejection decode_exact(const void*, int, status_t&);
+template Rejection decode_exact(const void*, int, scenario_t&);
+template Rejection decode_exact(const void*, int, event_t&);
+
+Rejection decode_command(const void* data, int size, ReceivedCommand& out) {
+  if (has_fingerprint<torque_command_t>(data, size))
+    return decode_command_as<torque_command_t>(data, size, rt::ControlMode::kTorque, out);
+  if (has_fingerprint<joint_position_command_t>(data, size))
+    return decode_command_as<joint_position_command_t>(data, size, rt::ControlMode::kJointPosition, out);
+  if (has_fingerprint<joint_velocity_command_t>(data, size))
+    return decode_command_as<joint_velocity_command_t>(data, size, rt::ControlMode::kJointVelocity, out);
+  return size < 8 ? Rejection::kTruncated : Rejection::kFingerprint;
+}
+
+std::vector<uint8_t> encode_command(rt::ControlMode mode, int64_t message_id, const rt::Command& command, int64_t utime) {
+  switch (mode) {
+    case rt::ControlMode::kTorque: {
+      torque_command_t m{};
+      return encode_command_as(message_id, command, utime, m.tau_J, m);
+    }
+    case rt::ControlMode::kJointPosition: {
+      joint_position_command_t m{};
+      return encode_command_as(message_id, command, utime, m.q, m);
+    }
+    case rt::ControlMode::kJointVelocity: {
+      joint_velocity_command_t m{};
+      return encode_command_as(message_id, command, utime, m.dq, m);
+    }
+  }
+  throw std::invalid_argument("unknown control mode");
+}
+
+int8_t control_mode_code(rt::ControlMode mode) {
+  switch (mode) {
+    case rt::ControlMode::kTorque: return config_request_t::CONTROL_TORQUE;
+    case rt::ControlMode::kJointPosition: return config_request_t::CONTROL_JOINT_POSITION;
+    case rt::ControlMode::kJointVelocity: return config_request_t::CONTROL_JOINT_VELOCITY;
+  }
+  return -1;
+}
+
+std::optional<rt::ControlMode> control_mode_from_code(int8_t code) {
+  switch (code) {
+    case config_request_t::CONTROL_TORQUE: return rt::ControlMode::kTorque;
+    case config_request_t::CONTROL_JOINT_POSITION: return rt::ControlMode::kJointPosition;
+    case config_request_t::CONTROL_JOINT_VELOCITY: return rt::ControlMode::kJointVelocity;
+    default: return std::nullopt;
+  }
+}
+
+void apply_configuration(const config_request_t& r, rt::Emulator& emulator) {
+  switch (r.request) {
+    case config_request_t::SET_COLLISION_BEHAVIOR: {
+      rt::CollisionBehavior b;
+      b.lower_torque_acceleration = Vector7(r.lower_torque_thresholds_acceleration);
+      b.upper_torque_acceleration = Vector7(r.upper_torque_thresholds_acceleration);
+      b.lower_torque_nominal = Vector7(r.lower_torque_thresholds_nominal);
+      b.upper_torque_nominal = Vector7(r.upper_torque_thresholds_nominal);
+      b.lower_force_acceleration = Vector6(r.lower_force_thresholds_acceleration);
+      b.upper_force_acceleration = Vector6(r.upper_force_thresholds_acceleration);
+      b.lower_force_nominal = Vector6(r.lower_force_thresholds_nominal);
+      b.upper_force_nominal = Vector6(r.upper_force_thresholds_nominal);
+      for (const auto* v : {&b.lower_torque_acceleration, &b.upper_torque_acceleration, &b.lower_torque_nominal, &b.upper_torque_nominal})
+        if (!v->allFinite() || (v->array() < 0.0).any())
+          throw std::invalid_argument("setCollisionBehavior: expected finite non-negative torque thresholds");
+      for (const auto* v : {&b.lower_force_acceleration, &b.upper_force_acceleration, &b.lower_force_nominal, &b.upper_force_nominal})
+        if (!v->allFinite() || (v->array() < 0.0).any())
+          throw std::invalid_argument("setCollisionBehavior: expected finite non-negative force thresholds");
+      emulator.set_collision_behavior(b);
+      return;
+    }
+    case config_request_t::SET_JOINT_IMPEDANCE: emulator.set_joint_impedance(Vector7(r.K_theta)); return;
+    case config_request_t::SET_LOAD: {
+      RigidBodyInertia load;
+      load.mass = r.load_mass;
+      load.com = Vector3(r.F_x_Cload);
+      load.inertia = Eigen::Map<const Matrix3>(r.load_inertia);   // column-major like I_load
+      emulator.set_load(load);
+      return;
+    }
+    case config_request_t::SET_EE: emulator.set_EE(transform_from(r.NE_T_EE, "setEE")); return;
+    case config_request_t::SET_K: emulator.set_K(transform_from(r.EE_T_K, "setK")); return;
+    case config_request_t::AUTOMATIC_ERROR_RECOVERY: emulator.automatic_error_recovery(); return;
+    default:
+      throw std::invalid_argument("unknown request " + std::to_string(r.request) + " (expected 1 to 7, see config_request_t)");
+  }
+}
+
+}  // namespace csp::bridge

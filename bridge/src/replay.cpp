@@ -1,0 +1,84 @@
+#include "csp/bridge/replay.hpp"
+
+#include <time.h>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <memory>
+
+#include "csp/bridge/lcm_log.hpp"
+#include "csp/bridge/server.hpp"
+
+namespace csp::bridge {
+
+ResimulationReport resimulate(const std::string& log_path) {
+  LogReader log(log_path);
+  // Both come from the scenario record, the log's first event.
+  std::unique_ptr<RobotServer> server;
+  std::unique_ptr<Channels> channels;
+  ResimulationReport report;
+  bool first_state = true;
+  for (const lcm::LogEvent* event = log.next(); event; event = log.next()) {
+    if (!server) {
+      // The scenario record comes first: it names the channels and rebuilds the emulator.
+      scenario_t record;
+      if (event->channel.size() < 12 || event->channel.compare(event->channel.size() - 12, 12, "CSP_SCENARIO") != 0 ||
+          decode_exact(event->data, event->datalen, record) != Rejection::kNone)
+        throw std::runtime_error(log_path + ": the first event is not a CSP_SCENARIO record (not a log written by csp serve or csp emulate --lcm-log)");
+      const rt::Scenario scenario = scenario_from_message(record);
+      channels = std::make_unique<Channels>(record.channel_prefix);
+      server = std::make_unique<RobotServer>(scenario.emulator, *channels, [](const std::string&, const std::vector<uint8_t>&) {},
+                                             [](const std::string&) {});
+      continue;
+    }
+    if (event->channel == channels->command || event->channel == channels->config) {
+      server->receive(event->channel, event->data, event->datalen, event->timestamp);
+      ++report.messages;
+    } else if (event->channel == channels->state) {
+      robot_state_t recorded;
+      if (decode_exact(event->data, event->datalen, recorded) != Rejection::kNone)
+        throw std::runtime_error(log_path + ": event " + std::to_string(event->eventnum) + " on " + event->channel + " is not a robot_state_t");
+      if (!first_state) server->step(event->timestamp);   // each recorded state after the first ends a cycle
+      first_state = false;
+      std::string field;
+      const double difference = state_difference(recorded, server->state_message(recorded.utime), field);
+      ++report.states;
+      if (field.empty()) continue;
+      ++report.differing_states;
+      report.max_difference = std::max(report.max_difference, difference);
+      if (report.first_difference.empty()) report.first_difference = "time " + std::to_string(recorded.time) + " ms: " + field;
+    }
+  }
+  if (!server) throw std::runtime_error(log_path + ": empty log");
+  return report;
+}
+
+uint64_t play_back(const std::string& log_path, const PlaybackOptions& options) {
+  if (!(options.speed >= 0.0) || !std::isfinite(options.speed)) throw std::invalid_argument("speed: expected a non-negative number");
+  LogReader log(log_path);
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) throw std::runtime_error("cannot open LCM at `" + options.lcm_url + "`");
+  uint64_t published = 0;
+  int64_t first_timestamp = 0;
+  timespec start{};
+  clock_gettime(CLOCK_MONOTONIC, &start);
+  for (const lcm::LogEvent* event = log.next(); event; event = log.next()) {
+    if (options.stop && options.stop->load()) break;
+    if (published == 0) first_timestamp = event->timestamp;
+    if (options.speed > 0.0) {
+      // Absolute schedule: the recorded offset divided by the speed, from the start.
+      const auto offset_ns = static_cast<int64_t>(static_cast<double>(std::max<int64_t>(event->timestamp - first_timestamp, 0)) * 1e3 / options.speed);
+      timespec at = start;
+      at.tv_sec += (at.tv_nsec + offset_ns) / 1'000'000'000;
+      at.tv_nsec = (at.tv_nsec + offset_ns) % 1'000'000'000;
+      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &at, nullptr) == EINTR) {
+      }
+    }
+    lcm.publish(event->channel, event->data, static_cast<unsigned>(event->datalen));
+    ++published;
+  }
+  return published;
+}
+
+}  // namespace csp::bridge
