@@ -20,6 +20,7 @@ Command add_emulate_command(CLI::App& app);
 Command add_serve_command(CLI::App& app);
 Command add_replay_command(CLI::App& app);
 Command add_log_command(CLI::App& app);
+Command add_gap_command(CLI::App& app);
 
 struct WorkspaceArguments {
   ModelArguments model;

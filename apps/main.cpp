@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   add(add_serve_command);
   add(add_replay_command);
   add(add_log_command);
+  add(add_gap_command);
 
   // CLI11 would report an unknown command as a missing one; name it instead.
   std::string known;

@@ -1,0 +1,72 @@
+// csp gap: where the simulator model misses a log of the real robot, which unmodelled effect is
+// responsible, and how far the gap shrinks once it is added (docs/gap.md states the criteria).
+#pragma once
+
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "csp/gap/effects.hpp"
+#include "csp/gap/log.hpp"
+
+namespace csp::gap {
+
+struct DiagnosisOptions {
+  FilterOptions filter;
+  double train_fraction = 0.5;    // of the log's duration, when there is no held-out log
+  int null_draws = 20;            // random regressors per significance test (max of 20 ~ 95th percentile)
+  double min_explained = 0.02;    // and an effect must remove at least this fraction of the held-out mean square
+  double parsimony_margin = 0.1;  // a smaller effect within this fraction of the best improvement is preferred
+  unsigned seed = 1;              // of the random regressors
+};
+
+// One effect (or set) fitted on the training part and evaluated on the held-out part.
+struct EffectResult {
+  std::string name;
+  int parameter_count = 0;
+  std::vector<int> joints;  // 1-based: joints whose held-out mean square it reduces by >= 10 %
+  nlohmann::json params;
+  Vector7 train_rms_after = Vector7::Zero(), heldout_rms_after = Vector7::Zero();
+  double explained_fraction = 0.0;  // of the held-out mean square it started from, clipped to 0..1
+  double null_threshold = 0.0;      // best held-out improvement of the random regressors of its size
+  bool significant = false;
+};
+
+// "Where it lies": the residual of one joint over both parts.
+struct JointGap {
+  double rms = 0.0, mean = 0.0, max_abs = 0.0, t_at_max = 0.0;
+  std::string part_at_max;                    // "train" or "heldout"
+  double sign_step = 0.0;                     // mean residual at dq > 0.05 rad/s minus at dq < -0.05 rad/s
+  std::map<std::string, double> correlation;  // with q, dq, sign(dq), ddq, gravity torque
+  std::array<double, 4> band_fraction{};      // residual power below 0.5, 0.5-2, 2-5, above 5 Hz
+};
+inline constexpr std::array<double, 3> kBandEdges = {0.5, 2.0, 5.0};
+
+struct Diagnosis {
+  Part train, heldout;
+  Vector7 baseline_train_rms = Vector7::Zero(), baseline_heldout_rms = Vector7::Zero();
+  std::array<JointGap, kNumJoints> where;
+  std::vector<EffectResult> effects;  // each effect alone, best held-out improvement first
+  std::vector<EffectResult> steps;    // forward selection: the set after each added cause
+  std::vector<std::string> causes;    // the selected effects, most important first
+  Vector7 verdict_heldout_rms_after = Vector7::Zero();
+  double unexplained_fraction = 1.0;       // held-out mean square left by the selected causes
+  nlohmann::json verdict_params;           // the causes' parameters fitted together
+  Eigen::VectorXd verdict_heldout_torque;  // the causes' torque on the held-out part (stacked)
+};
+
+Diagnosis diagnose(const Model& model, const JointLog& train, const JointLog& heldout,
+                   const DiagnosisOptions& options = {});
+// Splits one log in time: the first train_fraction for training, the rest held out.
+Diagnosis diagnose(const Model& model, const JointLog& log, const DiagnosisOptions& options = {});
+
+// The output contract of `csp gap --json` (docs/gap.md).
+nlohmann::json to_json(const Diagnosis& diagnosis);
+
+Vector7 rms(const Eigen::VectorXd& stacked);
+
+}  // namespace csp::gap

@@ -1,0 +1,60 @@
+// "Real" logs for checking the diagnosis on data whose effect is known: a truth model = the
+// diagnosing model plus injected effects, driven along a Fourier excitation trajectory within the
+// joint limits, with sensor noise like the real Panda log's. Built on the dynamics core only (the
+// rt/ emulator does not exist yet).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "csp/dynamics/model.hpp"
+#include "csp/gap/log.hpp"
+
+namespace csp::gap {
+
+// What the truth has that the diagnosing model lacks. Zero / empty = absent.
+struct InjectedEffects {
+  FrictionModel friction;                                         // added to the model's own friction
+  Vector7 sensor_offset = Vector7::Zero();                        // [N m]
+  RigidBodyInertia payload;                                       // on the flange, combined with the model's load
+  Vector7 armature = Vector7::Zero();                             // [kg m^2]
+  double tilt_x = 0.0, tilt_y = 0.0;                              // base rotation about base x, then y [rad]
+  double delay = 0.0;                                             // the torque sensor reads tau(t - delay) [s]
+  std::optional<std::array<RigidBodyInertia, kNumJoints>> links;  // the true inertial parameters
+};
+
+// One effect of the library (docs/gap.md lists the sizes), or "none", drawn with `seed`.
+InjectedEffects realistic_effect(const std::string& name, const Model& model, unsigned seed);
+// Both injections (each sets different fields).
+InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b);
+
+// q(t) = centre + sum_l a_l sin(l w t) + b_l cos(l w t), l = 1..5, scaled per joint to stay within
+// 80 % of the position range, 70 % of the velocity limit and 40 % of the acceleration limit.
+class ExcitationTrajectory {
+ public:
+  ExcitationTrajectory(const JointLimits& limits, unsigned seed, double period = 10.0);
+  void state(double t, Vector7& q, Vector7& dq, Vector7& ddq) const;
+
+ private:
+  static constexpr int kHarmonics = 5;
+  Vector7 centre_;
+  Eigen::Matrix<double, kNumJoints, kHarmonics> a_, b_;
+  double omega_;
+};
+
+struct LogOptions {
+  double duration = 10.0;  // [s]
+  double rate = 1000.0;    // [Hz], time stamps jittered by +-10 %
+  // Noise standard deviations, as estimated on the real log (Savitzky-Golay residual).
+  Vector7 torque_noise = (Vector7() << 0.26, 0.37, 0.22, 0.35, 0.094, 0.11, 0.034).finished();
+  double velocity_noise = 0.006;  // [rad/s]
+  double position_noise = 1e-4;   // [rad]
+};
+
+// The same options without any noise (for checks against the truth).
+LogOptions noise_free(LogOptions options);
+
+JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned trajectory_seed, unsigned noise_seed,
+                      const LogOptions& options = {});
+
+}  // namespace csp::gap

@@ -1,0 +1,46 @@
+// From a joint log to smooth samples: resample onto a uniform grid (linear interpolation), smooth
+// and differentiate with a zero-phase Savitzky-Golay filter, then keep every k-th sample.
+// The same filter is applied to the measured torque as to the motion, so the model prediction
+// (a function of filtered q, dq, ddq) and the measurement see the same frequency response.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "csp/gap/log.hpp"
+
+namespace csp::gap {
+
+struct FilterOptions {
+  double window = 0.101;        // Savitzky-Golay window [s] (-3 dB at 10.5 Hz at order 3)
+  int order = 3;                // polynomial order
+  double sample_period = 0.01;  // period of the samples kept for fitting [s] (Nyquist 50 Hz)
+};
+
+// Least-squares polynomial of degree `order` through 2 m + 1 equally spaced points (spacing dt),
+// evaluated at the centre: value and first derivative are fixed weighted sums of the points.
+class SavitzkyGolay {
+ public:
+  SavitzkyGolay(int half_width, int order, double dt);
+  int half_width() const { return half_width_; }
+  // Weighted sum of series[centre - m .. centre + m]; derivative = 0 (value) or 1 (d/dt).
+  Vector7 apply(const std::vector<Vector7>& series, std::size_t centre, int derivative) const;
+
+ private:
+  int half_width_;
+  Eigen::VectorXd value_weights_, derivative_weights_;
+};
+
+// Filtered samples of one log (one part: training or held out).
+struct Samples {
+  std::string source;
+  std::vector<double> t;
+  std::vector<Vector7> q, dq, ddq;  // ddq: derivative of dq (or the log's smoothed ddq)
+  std::vector<Vector7> tau;         // filtered measured torque
+  std::vector<Vector7> dtau;        // its time derivative
+  std::size_t size() const { return t.size(); }
+};
+
+// Throws LogError when the log is too short for the filter window.
+Samples filter_log(const JointLog& log, const FilterOptions& options);
+
+}  // namespace csp::gap

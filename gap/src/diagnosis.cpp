@@ -1,0 +1,426 @@
+#include "csp/gap/diagnosis.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <random>
+#include <tuple>
+#include <unsupported/Eigen/FFT>
+
+namespace csp::gap {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+Vector7 rms(const VectorXd& stacked) { return joint_mean_square(stacked).cwiseSqrt(); }
+
+namespace {
+
+using EffectSet = std::vector<const Effect*>;
+
+int set_size(const EffectSet& set) {
+  int size = 0;
+  for (const Effect* e : set) size += e->size();
+  return size;
+}
+
+VectorXd set_torque(const EffectSet& set, const Part& part, const VectorXd& theta) {
+  VectorXd tau = VectorXd::Zero(part.rows());
+  Eigen::Index offset = 0;
+  for (const Effect* e : set) {
+    tau += e->torque(part, theta.segment(offset, e->size()));
+    offset += e->size();
+  }
+  return tau;
+}
+
+MatrixXd set_jacobian(const EffectSet& set, const Part& part, const VectorXd& theta) {
+  MatrixXd J(part.rows(), set_size(set));
+  Eigen::Index offset = 0;
+  for (const Effect* e : set) {
+    J.middleCols(offset, e->size()) = e->jacobian(part, theta.segment(offset, e->size()));
+    offset += e->size();
+  }
+  return J;
+}
+
+struct SetFit {
+  VectorXd theta, sigma;
+  VectorXd train_left, heldout_left;  // residuals after the set: baseline residual - set torque
+};
+
+// Separable least squares on the training residual, from `theta`. The linear effects' parameters
+// are eliminated exactly (variable projection: for given nonlinear parameters they are the least-
+// squares solution, so the nonlinear fit sees the residual projected off the linear columns);
+// Levenberg-Marquardt with Marquardt's diagonal scaling fits the nonlinear ones.
+SetFit fit_set(const EffectSet& set, const Part& train, const Part& heldout, VectorXd theta) {
+  EffectSet nonlinear;
+  std::vector<Eigen::Index> linear_at, nonlinear_at;  // positions in theta
+  std::vector<MatrixXd> linear_columns;
+  Eigen::Index offset = 0;
+  for (const Effect* e : set) {
+    const auto* linear = dynamic_cast<const LinearEffect*>(e);
+    if (linear)
+      linear_columns.push_back(linear->regressor(train));
+    else
+      nonlinear.push_back(e);
+    for (int k = 0; k < e->size(); ++k) (linear ? linear_at : nonlinear_at).push_back(offset + k);
+    offset += e->size();
+  }
+  MatrixXd A(train.rows(), static_cast<Eigen::Index>(linear_at.size()));
+  for (Eigen::Index column = 0; const MatrixXd& block : linear_columns) {
+    A.middleCols(column, block.cols()) = block;
+    column += block.cols();
+  }
+  Eigen::ColPivHouseholderQR<MatrixXd> qr(A.rows(), A.cols());
+  if (A.cols() > 0) qr.compute(A);
+  const MatrixXd Q =
+      A.cols() > 0 ? MatrixXd(qr.householderQ() * MatrixXd::Identity(A.rows(), qr.rank())) : MatrixXd(A.rows(), 0);
+  auto project = [&Q](const MatrixXd& m) -> MatrixXd { return m - Q * (Q.transpose() * m); };
+  auto left = [&](const VectorXd& phi) -> VectorXd {
+    return project(train.residual - set_torque(nonlinear, train, phi));
+  };
+
+  VectorXd phi = theta(nonlinear_at);
+  VectorXd r = left(phi);
+  double rss = r.squaredNorm(), lambda = 1e-9;
+  for (int iteration = 0; iteration < 50 && phi.size() > 0; ++iteration) {
+    const MatrixXd J = project(set_jacobian(nonlinear, train, phi));
+    const MatrixXd normal = J.transpose() * J;
+    const VectorXd gradient = J.transpose() * r;
+    const VectorXd scale = normal.diagonal().cwiseMax(1e-12 * std::max(1.0, normal.diagonal().maxCoeff()));
+    bool accepted = false, converged = false;
+    for (; lambda < 1e12; lambda *= 10.0) {
+      MatrixXd damped = normal;
+      damped.diagonal() += lambda * scale;
+      const VectorXd candidate = phi + damped.ldlt().solve(gradient);
+      const VectorXd r_candidate = left(candidate);
+      const double rss_candidate = r_candidate.squaredNorm();
+      if (!(rss_candidate < rss)) continue;
+      converged = rss - rss_candidate <= 1e-10 * rss;
+      phi = candidate, r = r_candidate, rss = rss_candidate;
+      lambda = std::max(lambda / 100.0, 1e-12);
+      accepted = true;
+      break;
+    }
+    if (!accepted || converged) break;
+  }
+  theta(nonlinear_at) = phi;
+  if (A.cols() > 0) theta(linear_at) = qr.solve(train.residual - set_torque(nonlinear, train, phi));
+  r = train.residual - set_torque(set, train, theta);
+  rss = r.squaredNorm();
+
+  // Covariance sigma^2 (J^T J)^-1 at the optimum; unidentifiable directions give no uncertainty (null).
+  const MatrixXd J = set_jacobian(set, train, theta);
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> normal(J.transpose() * J);
+  const double dof = std::max<double>(1.0, static_cast<double>(J.rows() - J.cols()));
+  VectorXd sigma = VectorXd::Constant(theta.size(), std::numeric_limits<double>::infinity());
+  if (normal.eigenvalues().minCoeff() > 1e-12 * normal.eigenvalues().maxCoeff()) {
+    const MatrixXd covariance = normal.eigenvectors() * normal.eigenvalues().cwiseInverse().asDiagonal() *
+                                normal.eigenvectors().transpose() * (rss / dof);
+    sigma = covariance.diagonal().cwiseSqrt();
+  }
+  return {theta, sigma, r, heldout.residual - set_torque(set, heldout, theta)};
+}
+
+nlohmann::json describe_set(const EffectSet& set, const SetFit& fit) {
+  nlohmann::json params = nlohmann::json::object();
+  Eigen::Index offset = 0;
+  for (const Effect* e : set) {
+    params[e->name()] = e->describe(fit.theta.segment(offset, e->size()), fit.sigma.segment(offset, e->size()));
+    offset += e->size();
+  }
+  return params;
+}
+
+double explained(const VectorXd& before, const VectorXd& after) {
+  return 1.0 - after.squaredNorm() / std::max(before.squaredNorm(), std::numeric_limits<double>::min());
+}
+
+// Random regressors: each column lives on one random joint and is a random combination of five
+// sinusoids of a bank with frequencies uniform in 0.05..2 Hz (the band of excitation trajectories)
+// and random phases. The bank is evaluated once on both parts.
+class RandomRegressors {
+ public:
+  RandomRegressors(const Part& train, const Part& heldout, unsigned seed) : seed_(seed) {
+    std::mt19937_64 engine(seed);
+    std::uniform_real_distribution<double> frequency(0.05, 2.0), phase(0.0, 2.0 * M_PI);
+    for (const Part* part : {&train, &heldout}) bank_.emplace_back(part->samples.size(), kBankSize);
+    for (int b = 0; b < kBankSize; ++b) {
+      const double f = frequency(engine), phi = phase(engine);
+      for (std::size_t p = 0; p < 2; ++p) {
+        const Samples& samples = (p == 0 ? train : heldout).samples;
+        for (std::size_t k = 0; k < samples.size(); ++k)
+          bank_[p](static_cast<Eigen::Index>(k), b) = std::sin(2.0 * M_PI * f * samples.t[k] + phi);
+      }
+    }
+  }
+
+  // Held-out fraction of mean square removed by `size` random columns fitted by least squares to
+  // the training residual, best of `draws`.
+  double best_improvement(int size, int draws, const VectorXd& train_left, const VectorXd& heldout_left) const {
+    double best = -std::numeric_limits<double>::infinity();
+    for (int draw = 0; draw < draws; ++draw) {
+      std::mt19937_64 engine(seed_ * 1000003ULL + static_cast<unsigned>(size) * 1009ULL + static_cast<unsigned>(draw));
+      std::uniform_int_distribution<int> joint(0, kNumJoints - 1), pick(0, kBankSize - 1);
+      std::normal_distribution<double> amplitude;
+      std::vector<int> joints(static_cast<std::size_t>(size));
+      std::array<MatrixXd, 2> columns = {MatrixXd(bank_[0].rows(), size), MatrixXd(bank_[1].rows(), size)};
+      for (int c = 0; c < size; ++c) {
+        joints[static_cast<std::size_t>(c)] = joint(engine);
+        VectorXd weights = VectorXd::Zero(kBankSize);
+        for (int i = 0; i < 5; ++i) weights[pick(engine)] += amplitude(engine);
+        for (std::size_t p = 0; p < 2; ++p) columns[p].col(c) = bank_[p] * weights;
+      }
+      // Columns on different joints are orthogonal: the normal equations are block diagonal.
+      MatrixXd normal = MatrixXd::Zero(size, size);
+      VectorXd right = VectorXd::Zero(size);
+      for (int a = 0; a < size; ++a) {
+        right[a] = columns[0].col(a).dot(joint_values(train_left, joints[static_cast<std::size_t>(a)]));
+        for (int b = 0; b < size; ++b)
+          if (joints[static_cast<std::size_t>(a)] == joints[static_cast<std::size_t>(b)])
+            normal(a, b) = columns[0].col(a).dot(columns[0].col(b));
+      }
+      const VectorXd x = normal.completeOrthogonalDecomposition().solve(right);
+      VectorXd predicted = VectorXd::Zero(heldout_left.size());
+      for (int c = 0; c < size; ++c)
+        for (Eigen::Index k = 0; k < columns[1].rows(); ++k)
+          predicted[kNumJoints * k + joints[static_cast<std::size_t>(c)]] += x[c] * columns[1](k, c);
+      best = std::max(best, explained(heldout_left, heldout_left - predicted));
+    }
+    return best;
+  }
+
+ private:
+  static constexpr int kBankSize = 64;
+  static VectorXd joint_values(const VectorXd& stacked, int joint) {
+    return Eigen::Map<const VectorXd, 0, Eigen::InnerStride<kNumJoints>>(stacked.data() + joint,
+                                                                         stacked.size() / kNumJoints);
+  }
+  unsigned seed_;
+  std::vector<MatrixXd> bank_;  // samples x kBankSize, per part
+};
+
+// `null_threshold`: what random regressors of the last effect's size buy from the same residuals.
+EffectResult make_result(const std::string& name, const EffectSet& set, const SetFit& fit,
+                         const VectorXd& heldout_before, double null_threshold, const DiagnosisOptions& options) {
+  EffectResult result;
+  result.name = name;
+  result.parameter_count = set_size(set);
+  result.train_rms_after = rms(fit.train_left);
+  result.heldout_rms_after = rms(fit.heldout_left);
+  const double improvement = explained(heldout_before, fit.heldout_left);
+  result.explained_fraction = std::clamp(improvement, 0.0, 1.0);
+  result.null_threshold = null_threshold;
+  result.significant = improvement > result.null_threshold && improvement >= options.min_explained;
+  const Vector7 ms_before = joint_mean_square(heldout_before), ms_after = joint_mean_square(fit.heldout_left);
+  for (int j = 0; j < kNumJoints; ++j)
+    if (ms_after[j] <= 0.9 * ms_before[j]) result.joints.push_back(j + 1);
+  return result;
+}
+
+double correlation(const std::vector<double>& x, const std::vector<double>& y) {
+  const Eigen::Map<const VectorXd> a(x.data(), static_cast<Eigen::Index>(x.size())),
+      b(y.data(), static_cast<Eigen::Index>(y.size()));
+  const VectorXd da = a.array() - a.mean(), db = b.array() - b.mean();
+  const double denominator = da.norm() * db.norm();
+  return denominator > 0.0 ? da.dot(db) / denominator : 0.0;
+}
+
+// Fraction of the residual power of each joint in the bands of kBandEdges (periodogram per part).
+void add_band_power(const Part& part, std::array<std::array<double, 4>, kNumJoints>& power) {
+  const std::size_t n = part.samples.size();
+  const double period = (part.samples.t.back() - part.samples.t.front()) / static_cast<double>(n - 1);
+  Eigen::FFT<double> fft;
+  std::vector<double> series(n);
+  std::vector<std::complex<double>> spectrum;
+  for (int j = 0; j < kNumJoints; ++j) {
+    for (std::size_t k = 0; k < n; ++k) series[k] = part.residual[kNumJoints * static_cast<Eigen::Index>(k) + j];
+    fft.fwd(spectrum, series);
+    for (std::size_t f = 0; f <= n / 2; ++f) {
+      const double hz = static_cast<double>(f) / (static_cast<double>(n) * period);
+      const auto band = std::upper_bound(kBandEdges.begin(), kBandEdges.end(), hz) - kBandEdges.begin();
+      power[j][static_cast<std::size_t>(band)] += std::norm(spectrum[f]);
+    }
+  }
+}
+
+std::array<JointGap, kNumJoints> where_it_lies(const Part& train, const Part& heldout) {
+  std::array<JointGap, kNumJoints> gaps;
+  std::array<std::array<double, 4>, kNumJoints> power{};
+  add_band_power(train, power);
+  add_band_power(heldout, power);
+  for (int j = 0; j < kNumJoints; ++j) {
+    JointGap& gap = gaps[j];
+    std::vector<double> r, q, dq, sign, ddq, g;
+    double positive = 0.0, negative = 0.0;
+    int n_positive = 0, n_negative = 0;
+    for (const Part* part : {&train, &heldout})
+      for (std::size_t k = 0; k < part->samples.size(); ++k) {
+        const double value = part->residual[kNumJoints * static_cast<Eigen::Index>(k) + j], v = part->samples.dq[k][j];
+        r.push_back(value), q.push_back(part->samples.q[k][j]), dq.push_back(v), ddq.push_back(part->samples.ddq[k][j]);
+        sign.push_back(v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0)), g.push_back(part->gravity[k][j]);
+        if (std::abs(value) > gap.max_abs)
+          gap.max_abs = std::abs(value), gap.t_at_max = part->samples.t[k],
+          gap.part_at_max = part == &train ? "train" : "heldout";
+        if (v > 0.05) positive += value, ++n_positive;
+        if (v < -0.05) negative += value, ++n_negative;
+      }
+    const Eigen::Map<const VectorXd> values(r.data(), static_cast<Eigen::Index>(r.size()));
+    gap.rms = std::sqrt(values.squaredNorm() / static_cast<double>(r.size()));
+    gap.mean = values.mean();
+    gap.sign_step = (n_positive > 0 && n_negative > 0) ? positive / n_positive - negative / n_negative : 0.0;
+    gap.correlation = {{"q", correlation(r, q)},
+                       {"dq", correlation(r, dq)},
+                       {"sign_dq", correlation(r, sign)},
+                       {"ddq", correlation(r, ddq)},
+                       {"gravity", correlation(r, g)}};
+    double total = 0.0;
+    for (double p : power[j]) total += p;
+    for (std::size_t b = 0; b < 4; ++b) gap.band_fraction[b] = total > 0.0 ? power[j][b] / total : 0.0;
+  }
+  return gaps;
+}
+
+}  // namespace
+
+Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog& heldout_log,
+                   const DiagnosisOptions& options) {
+  const std::vector<std::unique_ptr<Effect>> library = effect_library(model);
+  const InertialRegressor regressor(model);
+  Diagnosis d;
+  d.train = evaluate_part(model, regressor, filter_log(train_log, options.filter));
+  d.heldout = evaluate_part(model, regressor, filter_log(heldout_log, options.filter));
+  const Part& train = d.train;
+  const Part& heldout = d.heldout;
+  d.baseline_train_rms = rms(train.residual);
+  d.baseline_heldout_rms = rms(heldout.residual);
+  d.where = where_it_lies(train, heldout);
+
+  // Null thresholds by effect size, for the residuals a step starts from.
+  const RandomRegressors random(train, heldout, options.seed);
+  std::map<int, double> thresholds;
+  auto threshold = [&](int size, const VectorXd& train_left, const VectorXd& heldout_left) {
+    if (!thresholds.count(size))
+      thresholds[size] = random.best_improvement(size, options.null_draws, train_left, heldout_left);
+    return thresholds[size];
+  };
+
+  // Each effect alone, against the baseline.
+  for (const auto& effect : library) {
+    const EffectSet set = {effect.get()};
+    const SetFit fit = fit_set(set, train, heldout, effect->initial_guess(train, train.residual));
+    d.effects.push_back(make_result(effect->name(), set, fit, heldout.residual,
+                                    threshold(effect->size(), train.residual, heldout.residual), options));
+    d.effects.back().params = describe_set(set, fit);
+  }
+  std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
+    return a.explained_fraction > b.explained_fraction;
+  });
+
+  // Forward selection: add the significant effect that removes most of what is left, preferring
+  // fewer parameters within the parsimony margin; stop when no candidate is significant.
+  EffectSet selected;
+  SetFit current{VectorXd(0), VectorXd(0), train.residual, heldout.residual};
+  while (selected.size() < library.size()) {
+    thresholds.clear();
+    const Effect* best = nullptr;
+    EffectResult best_result;
+    SetFit best_fit;
+    std::vector<std::tuple<const Effect*, EffectResult, SetFit>> passing;
+    for (const auto& effect : library) {
+      if (std::find(selected.begin(), selected.end(), effect.get()) != selected.end()) continue;
+      EffectSet set = selected;
+      set.push_back(effect.get());
+      VectorXd start(set_size(set));
+      start << current.theta, effect->initial_guess(train, current.train_left);
+      SetFit fit = fit_set(set, train, heldout, start);
+      EffectResult result = make_result(effect->name(), set, fit, current.heldout_left,
+                                        threshold(effect->size(), current.train_left, current.heldout_left), options);
+      if (result.significant) passing.emplace_back(effect.get(), std::move(result), std::move(fit));
+    }
+    if (passing.empty()) break;
+    double top = 0.0;
+    for (const auto& [effect, result, fit] : passing) top = std::max(top, result.explained_fraction);
+    for (auto& [effect, result, fit] : passing) {
+      if (result.explained_fraction < (1.0 - options.parsimony_margin) * top) continue;
+      if (best && (effect->size() > best->size() ||
+                   (effect->size() == best->size() && result.explained_fraction <= best_result.explained_fraction)))
+        continue;
+      best = effect, best_result = result, best_fit = fit;
+    }
+    selected.push_back(best);
+    best_result.params = describe_set(selected, best_fit);
+    d.causes.push_back(best->name());
+    d.steps.push_back(best_result);
+    current = best_fit;
+  }
+  d.verdict_heldout_rms_after = rms(current.heldout_left);
+  d.unexplained_fraction = current.heldout_left.squaredNorm() / heldout.residual.squaredNorm();
+  d.verdict_params = d.steps.empty() ? nlohmann::json::object() : d.steps.back().params;
+  d.verdict_heldout_torque = heldout.residual - current.heldout_left;
+  return d;
+}
+
+Diagnosis diagnose(const Model& model, const JointLog& log, const DiagnosisOptions& options) {
+  if (!(options.train_fraction > 0.0 && options.train_fraction < 1.0))
+    throw std::invalid_argument("training fraction must be between 0 and 1");
+  const double split = log.t.front() + options.train_fraction * (log.t.back() - log.t.front());
+  return diagnose(model, slice(log, log.t.front(), split), slice(log, split, log.t.back() + 1.0), options);
+}
+
+nlohmann::json to_json(const Diagnosis& d) {
+  auto vec = [](const Vector7& v) { return std::vector<double>(v.data(), v.data() + kNumJoints); };
+  auto effect = [&](const EffectResult& e) {
+    return nlohmann::json{{"name", e.name},
+                          {"joints", e.joints},
+                          {"parameter_count", e.parameter_count},
+                          {"params", e.params.contains(e.name) ? e.params.at(e.name) : e.params},
+                          {"train_rms_after", vec(e.train_rms_after)},
+                          {"heldout_rms_after", vec(e.heldout_rms_after)},
+                          {"explained_fraction", e.explained_fraction},
+                          {"null_threshold", e.null_threshold},
+                          {"significant", e.significant}};
+  };
+  nlohmann::json out;
+  out["baseline"] = {{"heldout_rms", vec(d.baseline_heldout_rms)}, {"train_rms", vec(d.baseline_train_rms)}};
+  out["effects"] = nlohmann::json::array();
+  for (const auto& e : d.effects) out["effects"].push_back(effect(e));
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& s : d.steps)
+    steps.push_back({{"added", s.name},
+                     {"explained_fraction_of_remaining", s.explained_fraction},
+                     {"null_threshold", s.null_threshold},
+                     {"heldout_rms_after", vec(s.heldout_rms_after)}});
+  out["verdict"] = {{"causes", d.causes},
+                    {"heldout_rms_after", vec(d.verdict_heldout_rms_after)},
+                    {"unexplained_fraction", d.unexplained_fraction},
+                    {"params", d.verdict_params},
+                    {"selection", steps}};
+  nlohmann::json where = nlohmann::json::array();
+  for (int j = 0; j < kNumJoints; ++j) {
+    const JointGap& g = d.where[j];
+    where.push_back({{"joint", j + 1},
+                     {"rms", g.rms},
+                     {"mean", g.mean},
+                     {"max_abs", g.max_abs},
+                     {"t_at_max", g.t_at_max},
+                     {"part_at_max", g.part_at_max},
+                     {"sign_step", g.sign_step},
+                     {"correlation", g.correlation},
+                     {"band_fraction",
+                      {{"below_0.5Hz", g.band_fraction[0]},
+                       {"0.5_2Hz", g.band_fraction[1]},
+                       {"2_5Hz", g.band_fraction[2]},
+                       {"above_5Hz", g.band_fraction[3]}}}});
+  }
+  out["where"] = where;
+  out["samples"] = {{"train", d.train.samples.size()}, {"heldout", d.heldout.samples.size()}};
+  return out;
+}
+
+}  // namespace csp::gap

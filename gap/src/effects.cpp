@@ -1,0 +1,293 @@
+#include "csp/gap/effects.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+#include <cmath>
+
+#include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/robot_config.hpp"
+
+namespace csp::gap {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+namespace {
+
+Eigen::Index rows_of(int sample) { return kNumJoints * static_cast<Eigen::Index>(sample); }
+
+std::vector<double> values(const VectorXd& v, Eigen::Index begin, Eigen::Index count, Eigen::Index stride = 1) {
+  std::vector<double> out;
+  for (Eigen::Index i = 0; i < count; ++i) out.push_back(v[begin + i * stride]);
+  return out;
+}
+
+double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+// --- sensor_offset: a constant bias per joint torque sensor -------------------------------------
+class SensorOffset : public LinearEffect {
+ public:
+  std::string name() const override { return "sensor_offset"; }
+  int size() const override { return kNumJoints; }
+  MatrixXd regressor(const Part& part) const override {
+    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
+    for (Eigen::Index r = 0; r < part.rows(); ++r) Y(r, r % kNumJoints) = 1.0;
+    return Y;
+  }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    return {{"offset_Nm", values(theta, 0, kNumJoints)}, {"offset_Nm_sigma", values(sigma, 0, kNumJoints)}};
+  }
+};
+
+// --- armature: rotor inertia reflected to the link side, I_a,j ddq_j -----------------------------
+class Armature : public LinearEffect {
+ public:
+  std::string name() const override { return "armature"; }
+  int size() const override { return kNumJoints; }
+  MatrixXd regressor(const Part& part) const override {
+    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
+    for (std::size_t k = 0; k < part.samples.size(); ++k)
+      for (int j = 0; j < kNumJoints; ++j) Y(rows_of(static_cast<int>(k)) + j, j) = part.samples.ddq[k][j];
+    return Y;
+  }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    return {{"inertia_kgm2", values(theta, 0, kNumJoints)}, {"inertia_kgm2_sigma", values(sigma, 0, kNumJoints)}};
+  }
+};
+
+// --- base_tilt: gravity direction off by small rotations about base x and y ----------------------
+class BaseTilt : public LinearEffect {
+ public:
+  std::string name() const override { return "base_tilt"; }
+  int size() const override { return 2; }
+  MatrixXd regressor(const Part& part) const override { return part.tilt; }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    const double degrees = 180.0 / M_PI;
+    return {{"about_x_deg", degrees * theta[0]},
+            {"about_y_deg", degrees * theta[1]},
+            {"about_x_deg_sigma", degrees * sigma[0]},
+            {"about_y_deg_sigma", degrees * sigma[1]}};
+  }
+};
+
+// --- time_delay: measured torque late by d: tau_m(t) = tau(t - d) ~ tau(t) - d dtau/dt ----------
+class TimeDelay : public LinearEffect {
+ public:
+  std::string name() const override { return "time_delay"; }
+  int size() const override { return 1; }
+  MatrixXd regressor(const Part& part) const override { return -stack(part.samples.dtau); }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    return {{"delay_ms", 1e3 * theta[0]}, {"delay_ms_sigma", 1e3 * sigma[0]}};
+  }
+};
+
+// --- inertial_parameters: errors of the identifiable base parameters ----------------------------
+class InertialParameters : public LinearEffect {
+ public:
+  explicit InertialParameters(const Model& model) : model_(model), base_(base_parameters(model)) {}
+  std::string name() const override { return "inertial_parameters"; }
+  int size() const override { return static_cast<int>(base_.columns.size()); }
+  MatrixXd regressor(const Part& part) const override { return part.inertial(Eigen::all, base_.columns); }
+
+  // Physical consistency of the corrected model. Base parameters fix only combinations of the 70
+  // standard ones, so we check one realisation: the smallest change of the standard parameters
+  // reproducing the fitted base-parameter change. Checked: every link's mass > 0 and its inertia
+  // about the CoM positive definite with the triangle inequality; and the mass matrix positive
+  // definite at the random states used for the base parameters (the identified dynamics are
+  // physically meaningful even when the realisation is not).
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    const MatrixXd base_regressor = base_.random_regressor(Eigen::all, base_.columns);
+    const VectorXd standard = base_.random_regressor.completeOrthogonalDecomposition().solve(base_regressor * theta);
+    ModelParameters p = model_.parameters();
+    p.end_effector = p.load = RigidBodyInertia{};
+    bool links_physical = true;
+    double largest_mass_change = 0.0;
+    for (int i = 0; i < kNumJoints; ++i) {
+      const LinkParameters change = standard.segment<kLinkParameters>(kLinkParameters * i);
+      const SpatialInertia body = spatial_inertia(link_parameters(model_.body(i)) + change);
+      largest_mass_change = std::max(largest_mass_change, std::abs(change[0]));
+      links_physical = links_physical && body.mass > 0.0 && is_physical_inertia(rigid_body(body).inertia);
+      if (body.mass > 0.0) p.links[i] = rigid_body(body);
+    }
+    bool mass_matrix_pd = links_physical;
+    if (!links_physical) {  // the realisation is not a set of bodies; check M = Y(q, 0, e_j) directly
+      mass_matrix_pd = true;
+      const InertialRegressor regressor(model_);
+      Data data;
+      for (const Vector7& q : base_.random_q) {
+        crba(model_, data, q);
+        Matrix7 M = data.mass_matrix;
+        const Vector7 gravity_change = regressor(data, q, Vector7::Zero(), Vector7::Zero()) * standard;
+        for (int j = 0; j < kNumJoints; ++j)
+          M.col(j) += regressor(data, q, Vector7::Zero(), Vector7::Unit(j)) * standard - gravity_change;
+        mass_matrix_pd = mass_matrix_pd && Eigen::LLT<Matrix7>(M).info() == Eigen::Success;
+      }
+    }
+    std::vector<std::string> column_names;
+    static const char* const kNames[] = {"m", "hx", "hy", "hz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"};
+    for (int c : base_.columns)
+      column_names.push_back(std::string(kNames[c % kLinkParameters]) + "_" + std::to_string(c / kLinkParameters + 1));
+    return {{"base_parameter_count", size()},
+            {"base_parameter_columns", column_names},
+            {"delta", values(theta, 0, size())},
+            {"delta_sigma", values(sigma, 0, size())},
+            {"largest_link_mass_change_kg", largest_mass_change},
+            {"realisation_physically_consistent", links_physical},
+            {"mass_matrix_positive_definite", mass_matrix_pd}};
+  }
+
+ private:
+  Model model_;
+  BaseParameters base_;
+};
+
+// --- payload: a point mass on the flange (mass m, CoM c in the flange frame) --------------------
+// Parameters (m, h = m c): the torque is linear in (m, h) except for the point mass's rotational
+// inertia about the flange, (|h|^2 1 - h h^T) / m, which is small; the fit starts from the linear
+// part and Gauss-Newton does the rest.
+class Payload : public Effect {
+ public:
+  explicit Payload(const Model& model) : link7_T_flange_(model.parameters().link7_T_flange) {}
+  std::string name() const override { return "payload"; }
+  int size() const override { return 4; }
+
+  VectorXd torque(const Part& part, const VectorXd& theta) const override {
+    return part.inertial.rightCols<kLinkParameters>() * link7_parameters(theta, true);
+  }
+  VectorXd initial_guess(const Part& part, const VectorXd& target) const override {
+    MatrixXd columns(part.rows(), 4);
+    for (int k = 0; k < 4; ++k)
+      columns.col(k) = part.inertial.rightCols<kLinkParameters>() * link7_parameters(VectorXd::Unit(4, k), false);
+    return columns.colPivHouseholderQr().solve(target);
+  }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    const double m = theta[0];
+    return {{"mass_kg", m},
+            {"mass_kg_sigma", sigma[0]},
+            {"com_m", values(theta / m, 1, 3)},
+            {"com_m_sigma", values(sigma / std::abs(m), 1, 3)}};
+  }
+
+ private:
+  // The payload's standard parameters in the link-7 frame.
+  LinkParameters link7_parameters(const VectorXd& theta, bool second_moment) const {
+    const double m = theta[0];
+    const Vector3 h = theta.segment<3>(1);
+    const bool defined = second_moment && std::abs(m) > 1e-6;
+    const Matrix3 I =
+        defined ? ((h.squaredNorm() * Matrix3::Identity() - h * h.transpose()) / m).eval() : Matrix3::Zero();
+    return link_parameters(SpatialInertia{m, h, I}.expressed_in(link7_T_flange_));
+  }
+  Transform link7_T_flange_;
+};
+
+// --- joint_friction: per joint, phi1 (s(phi2 (dq + phi3)) - s(phi2 phi3)) + f_v dq ---------------
+// The Gaz et al. (2019) sigmoid (s the logistic function; zero at rest) plus viscous friction; a
+// steep sigmoid with phi3 = 0 is Coulomb friction of phi1 / 2. Parameters per joint:
+// (phi1, ln phi2, phi3, f_v); ln phi2 keeps phi2 positive.
+class JointFriction : public Effect {
+ public:
+  std::string name() const override { return "joint_friction"; }
+  int size() const override { return 4 * kNumJoints; }
+
+  VectorXd torque(const Part& part, const VectorXd& theta) const override {
+    VectorXd tau(part.rows());
+    for (Eigen::Index r = 0; r < part.rows(); ++r) {
+      const int j = static_cast<int>(r % kNumJoints);
+      const double dq = part.samples.dq[r / kNumJoints][j];
+      tau[r] = friction_law(theta[4 * j], std::exp(theta[4 * j + 1]), theta[4 * j + 2], theta[4 * j + 3], dq);
+    }
+    return tau;
+  }
+
+  MatrixXd jacobian(const Part& part, const VectorXd& theta) const override {
+    MatrixXd J = MatrixXd::Zero(part.rows(), size());
+    for (Eigen::Index r = 0; r < part.rows(); ++r) {
+      const int j = static_cast<int>(r % kNumJoints);
+      const double dq = part.samples.dq[r / kNumJoints][j];
+      const double phi1 = theta[4 * j], phi2 = std::exp(theta[4 * j + 1]), phi3 = theta[4 * j + 2];
+      const double s1 = logistic(phi2 * (dq + phi3)), s0 = logistic(phi2 * phi3);
+      const double d1 = s1 * (1.0 - s1), d0 = s0 * (1.0 - s0);
+      J(r, 4 * j) = s1 - s0;
+      J(r, 4 * j + 1) = phi1 * phi2 * (d1 * (dq + phi3) - d0 * phi3);
+      J(r, 4 * j + 2) = phi1 * phi2 * (d1 - d0);
+      J(r, 4 * j + 3) = dq;
+    }
+    return J;
+  }
+
+  // Per joint, a grid over (phi2, phi3) with (phi1, f_v) by least squares at each point.
+  VectorXd initial_guess(const Part& part, const VectorXd& target) const override {
+    VectorXd theta(size());
+    const Eigen::Index n = part.rows() / kNumJoints;
+    for (int j = 0; j < kNumJoints; ++j) {
+      double best = std::numeric_limits<double>::infinity();
+      for (double log_phi2 = std::log(2.0); log_phi2 < std::log(120.0); log_phi2 += std::log(120.0 / 2.0) / 10.0)
+        for (double phi3 = -0.1; phi3 < 0.1001; phi3 += 0.025) {
+          Eigen::MatrixX2d A(n, 2);
+          VectorXd b(n);
+          for (Eigen::Index k = 0; k < n; ++k) {
+            const double dq = part.samples.dq[k][j];
+            A(k, 0) = friction_law(1.0, std::exp(log_phi2), phi3, 0.0, dq);
+            A(k, 1) = dq;
+            b[k] = target[kNumJoints * k + j];
+          }
+          const Eigen::Vector2d x = A.colPivHouseholderQr().solve(b);
+          const double rss = (A * x - b).squaredNorm();
+          if (rss < best) best = rss, theta.segment<4>(4 * j) << x[0], log_phi2, phi3, x[1];
+        }
+    }
+    return theta;
+  }
+
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    const VectorXd phi2 = theta(Eigen::seqN(1, kNumJoints, 4)).array().exp();
+    const VectorXd phi2_sigma = phi2.cwiseProduct(sigma(Eigen::seqN(1, kNumJoints, 4)));
+    return {{"phi1_Nm", values(theta, 0, kNumJoints, 4)},
+            {"phi1_Nm_sigma", values(sigma, 0, kNumJoints, 4)},
+            {"phi2_s_per_rad", values(phi2, 0, kNumJoints)},
+            {"phi2_s_per_rad_sigma", values(phi2_sigma, 0, kNumJoints)},
+            {"phi3_rad_per_s", values(theta, 2, kNumJoints, 4)},
+            {"phi3_rad_per_s_sigma", values(sigma, 2, kNumJoints, 4)},
+            {"viscous_Nms_per_rad", values(theta, 3, kNumJoints, 4)},
+            {"viscous_Nms_per_rad_sigma", values(sigma, 3, kNumJoints, 4)}};
+  }
+};
+
+}  // namespace
+
+double friction_law(double phi1, double phi2, double phi3, double viscous, double dq) {
+  return phi1 * (logistic(phi2 * (dq + phi3)) - logistic(phi2 * phi3)) + viscous * dq;
+}
+
+MatrixXd Effect::jacobian(const Part& part, const VectorXd& theta) const {
+  const VectorXd tau = torque(part, theta);
+  MatrixXd J(part.rows(), size());
+  for (int k = 0; k < size(); ++k) {
+    VectorXd moved = theta;
+    const double step = 1e-6 * std::max(1.0, std::abs(theta[k]));
+    moved[k] += step;
+    J.col(k) = (torque(part, moved) - tau) / step;
+  }
+  return J;
+}
+
+VectorXd LinearEffect::torque(const Part& part, const VectorXd& theta) const { return regressor(part) * theta; }
+MatrixXd LinearEffect::jacobian(const Part& part, const VectorXd&) const { return regressor(part); }
+VectorXd LinearEffect::initial_guess(const Part& part, const VectorXd& target) const {
+  return regressor(part).colPivHouseholderQr().solve(target);
+}
+
+std::vector<std::unique_ptr<Effect>> effect_library(const Model& model) {
+  std::vector<std::unique_ptr<Effect>> library;
+  library.push_back(std::make_unique<JointFriction>());
+  library.push_back(std::make_unique<SensorOffset>());
+  library.push_back(std::make_unique<Payload>(model));
+  library.push_back(std::make_unique<Armature>());
+  library.push_back(std::make_unique<BaseTilt>());
+  library.push_back(std::make_unique<TimeDelay>());
+  library.push_back(std::make_unique<InertialParameters>(model));
+  return library;
+}
+
+}  // namespace csp::gap

@@ -1,0 +1,145 @@
+#include "csp/gap/generator.hpp"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "csp/dynamics/algorithms.hpp"
+
+namespace csp::gap {
+
+namespace {
+
+double uniform(std::mt19937_64& engine, double low, double high) {
+  return std::uniform_real_distribution<double>(low, high)(engine);
+}
+double random_sign(std::mt19937_64& engine) { return uniform(engine, -1.0, 1.0) < 0.0 ? -1.0 : 1.0; }
+
+Matrix3 rotation_x(double a) { return Eigen::AngleAxisd(a, Vector3::UnitX()).toRotationMatrix(); }
+Matrix3 rotation_y(double a) { return Eigen::AngleAxisd(a, Vector3::UnitY()).toRotationMatrix(); }
+
+}  // namespace
+
+InjectedEffects realistic_effect(const std::string& name, const Model& model, unsigned seed) {
+  std::mt19937_64 engine(seed);
+  InjectedEffects truth;
+  if (name == "none") return truth;
+  if (name == "joint_friction") {  // the ranges of Gaz et al.'s identified Panda sigmoid friction
+    truth.friction.type = FrictionModel::Type::kGazSigmoid;
+    for (int j = 0; j < kNumJoints; ++j) {
+      truth.friction.phi1[j] = uniform(engine, 0.3, 1.2);
+      truth.friction.phi2[j] = uniform(engine, 5.0, 17.0);
+      truth.friction.phi3[j] = uniform(engine, -0.05, 0.05);
+    }
+  } else if (name == "sensor_offset") {  // the seed paper's ~0.4 N m
+    for (int j = 0; j < kNumJoints; ++j) truth.sensor_offset[j] = random_sign(engine) * uniform(engine, 0.2, 0.5);
+  } else if (name == "payload") {  // a tool or object of 0.5-1.5 kg: a solid 8 cm cube off the flange
+    truth.payload.mass = uniform(engine, 0.5, 1.5);
+    truth.payload.com = Vector3(uniform(engine, -0.03, 0.03), uniform(engine, -0.03, 0.03), uniform(engine, 0.03, 0.1));
+    truth.payload.inertia = truth.payload.mass * 0.08 * 0.08 / 6.0 * Matrix3::Identity();
+  } else if (name == "armature") {  // reflected rotor inertia
+    for (int j = 0; j < kNumJoints; ++j) truth.armature[j] = uniform(engine, 0.03, 0.1);
+  } else if (name == "base_tilt") {  // a mounting plate off level by 0.3-1 degree per axis
+    truth.tilt_x = random_sign(engine) * uniform(engine, 0.3, 1.0) * M_PI / 180.0;
+    truth.tilt_y = random_sign(engine) * uniform(engine, 0.3, 1.0) * M_PI / 180.0;
+  } else if (name == "time_delay") {  // a few 1 kHz cycles between torque sensing and motion
+    truth.delay = uniform(engine, 0.002, 0.005);
+  } else if (name == "inertial_parameters") {  // masses +-10 %, CoM +-1 cm, inertia +-20 %
+    std::array<RigidBodyInertia, kNumJoints> links = model.parameters().links;
+    for (RigidBodyInertia& link : links) {
+      link.mass *= 1.0 + uniform(engine, -0.1, 0.1);
+      for (int k = 0; k < 3; ++k) link.com[k] += uniform(engine, -0.01, 0.01);
+      link.inertia *= 1.0 + uniform(engine, -0.2, 0.2);
+    }
+    truth.links = links;
+  } else {
+    throw std::invalid_argument("unknown effect `" + name + "`");
+  }
+  return truth;
+}
+
+InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b) {
+  InjectedEffects m = a;
+  if (b.friction.type != FrictionModel::Type::kNone) m.friction = b.friction;
+  m.sensor_offset += b.sensor_offset;
+  if (b.payload.mass > 0.0) m.payload = b.payload;
+  m.armature += b.armature;
+  m.tilt_x += b.tilt_x, m.tilt_y += b.tilt_y, m.delay += b.delay;
+  if (b.links) m.links = b.links;
+  return m;
+}
+
+ExcitationTrajectory::ExcitationTrajectory(const JointLimits& limits, unsigned seed, double period)
+    : omega_(2.0 * M_PI / period) {
+  std::mt19937_64 engine(seed);
+  std::normal_distribution<double> normal;
+  centre_ = 0.5 * (limits.q_min + limits.q_max);
+  for (int j = 0; j < kNumJoints; ++j)
+    for (int l = 0; l < kHarmonics; ++l) a_(j, l) = normal(engine) / (l + 1), b_(j, l) = normal(engine) / (l + 1);
+  // Peaks over one period on a fine grid, then one scale per joint.
+  Vector7 q_peak = Vector7::Zero(), dq_peak = Vector7::Zero(), ddq_peak = Vector7::Zero();
+  for (int k = 0; k < 2000; ++k) {
+    Vector7 q, dq, ddq;
+    state(period * k / 2000.0, q, dq, ddq);
+    q_peak = q_peak.cwiseMax((q - centre_).cwiseAbs()), dq_peak = dq_peak.cwiseMax(dq.cwiseAbs());
+    ddq_peak = ddq_peak.cwiseMax(ddq.cwiseAbs());
+  }
+  for (int j = 0; j < kNumJoints; ++j) {
+    const double scale = std::min({0.4 * (limits.q_max[j] - limits.q_min[j]) / q_peak[j],
+                                   0.7 * limits.dq_max[j] / dq_peak[j], 0.4 * limits.ddq_max[j] / ddq_peak[j]});
+    a_.row(j) *= scale, b_.row(j) *= scale;
+  }
+}
+
+void ExcitationTrajectory::state(double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
+  q = centre_, dq.setZero(), ddq.setZero();
+  for (int l = 0; l < kHarmonics; ++l) {
+    const double w = (l + 1) * omega_, s = std::sin(w * t), c = std::cos(w * t);
+    q += a_.col(l) * s + b_.col(l) * c;
+    dq += w * (a_.col(l) * c - b_.col(l) * s);
+    ddq -= w * w * (a_.col(l) * s + b_.col(l) * c);
+  }
+}
+
+LogOptions noise_free(LogOptions options) {
+  options.torque_noise.setZero();
+  options.velocity_noise = options.position_noise = 0.0;
+  return options;
+}
+
+JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned trajectory_seed, unsigned noise_seed,
+                      const LogOptions& options) {
+  ModelParameters p = model.parameters();
+  if (truth.links) p.links = *truth.links;
+  p.load = combine(p.load, truth.payload);
+  p.gravity = rotation_x(truth.tilt_x) * rotation_y(truth.tilt_y) * p.gravity;
+  const Model true_model(p);
+  const ExcitationTrajectory trajectory(p.joint_limits, trajectory_seed);
+
+  std::mt19937_64 engine(noise_seed);
+  std::normal_distribution<double> normal;
+  auto noise = [&](const Vector7& sigma) {
+    Vector7 n;
+    for (int j = 0; j < kNumJoints; ++j) n[j] = sigma[j] * normal(engine);
+    return n;
+  };
+  JointLog log;
+  log.source = "generated (trajectory seed " + std::to_string(trajectory_seed) + ")";
+  Data data;
+  const double dt = 1.0 / options.rate;
+  for (double t = 0.0; t <= options.duration; t += dt * (1.0 + uniform(engine, -0.1, 0.1))) {
+    Vector7 q, dq, ddq, tau;
+    trajectory.state(t, q, dq, ddq);
+    log.t.push_back(t);
+    log.q.push_back(q + noise(Vector7::Constant(options.position_noise)));
+    log.dq.push_back(dq + noise(Vector7::Constant(options.velocity_noise)));
+    trajectory.state(t - truth.delay, q, dq, ddq);  // the torque the sensor reports now
+    rnea(true_model, data, q, dq, ddq, tau);
+    tau += friction_torque(p.friction, dq) + friction_torque(truth.friction, dq) + truth.armature.cwiseProduct(ddq) +
+           truth.sensor_offset;
+    log.tau.push_back(tau + noise(options.torque_noise));
+  }
+  return log;
+}
+
+}  // namespace csp::gap

@@ -1,0 +1,81 @@
+#include "csp/gap/signal.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+
+namespace csp::gap {
+
+SavitzkyGolay::SavitzkyGolay(int half_width, int order, double dt) : half_width_(half_width) {
+  // Vandermonde matrix of the window; row r of its pseudo-inverse maps the points to the
+  // coefficient of x^r, so row 0 is the value at the centre and row 1 / dt the derivative.
+  const int n = 2 * half_width + 1;
+  Eigen::MatrixXd vandermonde(n, order + 1);
+  for (int i = 0; i < n; ++i)
+    for (int r = 0; r <= order; ++r) vandermonde(i, r) = std::pow(static_cast<double>(i - half_width), r);
+  const Eigen::MatrixXd pseudo_inverse = vandermonde.colPivHouseholderQr().solve(Eigen::MatrixXd::Identity(n, n));
+  value_weights_ = pseudo_inverse.row(0).transpose();
+  derivative_weights_ = pseudo_inverse.row(1).transpose() / dt;
+}
+
+Vector7 SavitzkyGolay::apply(const std::vector<Vector7>& series, std::size_t centre, int derivative) const {
+  const Eigen::VectorXd& w = derivative == 0 ? value_weights_ : derivative_weights_;
+  Vector7 sum = Vector7::Zero();
+  for (int i = 0; i < w.size(); ++i) sum += w[i] * series[centre - half_width_ + i];
+  return sum;
+}
+
+namespace {
+
+// Linear interpolation of `series` (at times t) onto the grid t0 + k dt, k = 0..n-1.
+std::vector<Vector7> resample(const std::vector<double>& t, const std::vector<Vector7>& series, double dt,
+                              std::size_t n) {
+  std::vector<Vector7> out(n);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ti = t.front() + static_cast<double>(i) * dt;
+    while (k + 2 < t.size() && t[k + 1] < ti) ++k;
+    const double a = std::clamp((ti - t[k]) / (t[k + 1] - t[k]), 0.0, 1.0);
+    out[i] = (1.0 - a) * series[k] + a * series[k + 1];
+  }
+  return out;
+}
+
+}  // namespace
+
+Samples filter_log(const JointLog& log, const FilterOptions& options) {
+  // Grid spacing: the median time step (robust to the jitter and gaps of real logs).
+  std::vector<double> steps(log.size() > 1 ? log.size() - 1 : 0);
+  for (std::size_t k = 0; k + 1 < log.size(); ++k) steps[k] = log.t[k + 1] - log.t[k];
+  if (steps.empty()) throw LogError(log.source + ": expected at least 2 rows");
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  const double dt = steps[steps.size() / 2];
+  const std::size_t n = static_cast<std::size_t>(std::floor((log.t.back() - log.t.front()) / dt)) + 1;
+  const int half_width = std::max(options.order / 2 + 1, static_cast<int>(std::lround(0.5 * options.window / dt)));
+  const std::size_t stride =
+      std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(options.sample_period / dt)));
+  const std::size_t needed = 2 * static_cast<std::size_t>(half_width) + 1 + 10 * stride;
+  if (n < needed)
+    throw LogError(log.source + ": too short for the smoothing filter: " + std::to_string(n) +
+                   " samples on the uniform grid, need at least " + std::to_string(needed) + " (" +
+                   std::to_string(options.window) + " s window plus 10 samples)");
+
+  const std::vector<Vector7> q = resample(log.t, log.q, dt, n), dq = resample(log.t, log.dq, dt, n),
+                             tau = resample(log.t, log.tau, dt, n);
+  const std::vector<Vector7> ddq = log.ddq.empty() ? std::vector<Vector7>{} : resample(log.t, log.ddq, dt, n);
+  const SavitzkyGolay filter(half_width, options.order, dt);
+
+  Samples s;
+  s.source = log.source;
+  for (std::size_t k = half_width; k + half_width < n; k += stride) {
+    s.t.push_back(log.t.front() + static_cast<double>(k) * dt);
+    s.q.push_back(filter.apply(q, k, 0));
+    s.dq.push_back(filter.apply(dq, k, 0));
+    s.ddq.push_back(ddq.empty() ? filter.apply(dq, k, 1) : filter.apply(ddq, k, 0));
+    s.tau.push_back(filter.apply(tau, k, 0));
+    s.dtau.push_back(filter.apply(tau, k, 1));
+  }
+  return s;
+}
+
+}  // namespace csp::gap

@@ -1,0 +1,341 @@
+// gap/: log reading, the smoothing differentiator, the inertial regressor and base parameters, the
+// effect library against the generator's known truth, and the csp gap command.
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "csp/gap/diagnosis.hpp"
+#include "csp/gap/generator.hpp"
+#include "support.hpp"
+
+namespace csp::test {
+namespace {
+
+using namespace csp::gap;
+
+Model diagnosing_model() {
+  ModelOptions options;
+  options.friction = "none";
+  return make_model("panda", options);
+}
+
+// A generated log of the diagnosing model itself (no injected effect), `duration` seconds long.
+JointLog plain_log(const Model& model, double duration, unsigned seed, bool noisy = true) {
+  LogOptions options;
+  options.duration = duration;
+  return generate_log(model, {}, seed, seed + 1, noisy ? options : noise_free(options));
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const std::string path = (temp_dir() / name).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string header() {
+  std::string h = "t";
+  for (const char* prefix : {"q", "dq", "tau_J"})
+    for (int j = 1; j <= 7; ++j) h += std::string(",") + prefix + std::to_string(j);
+  return h + "\n";
+}
+
+std::string row(double t, const std::string& value = "0.1") {
+  std::string r = std::to_string(t);
+  for (int c = 0; c < 21; ++c) r += "," + value;
+  return r + "\n";
+}
+
+std::string read_error(const std::string& path) {
+  try {
+    read_log_csv(path);
+  } catch (const LogError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(GapLog, RoundTripOfAGeneratedLog) {
+  const Model model = diagnosing_model();
+  const JointLog log = plain_log(model, 0.2, 1);
+  const std::string path = (temp_dir() / "round_trip.csv").string();
+  write_log_csv(path, log);
+  const JointLog back = read_log_csv(path);
+  ASSERT_EQ(back.size(), log.size());
+  for (std::size_t k = 0; k < log.size(); ++k) {
+    EXPECT_NEAR(back.t[k], log.t[k], 1e-9);
+    EXPECT_TRUE(near(back.q[k], log.q[k], 1e-9));
+    EXPECT_TRUE(near(back.tau[k], log.tau[k], 1e-8));
+  }
+}
+
+TEST(GapLog, BadInputNamesFileLineAndColumn) {
+  const std::string h = header();
+  struct Case {
+    std::string text, expected;
+  };
+  const std::vector<Case> cases = {
+      {"", "empty file"},
+      {h.substr(0, h.find(",tau_J7")) + "\n" + row(0.0), ":1: missing column `tau_J7`"},
+      {"t,q1,q1" + h.substr(h.find(",q2")), ":1: column 3: duplicate column `q1`"},
+      {h.substr(0, h.size() - 1) + ",temperature\n", ":1: column 23: unknown column `temperature`"},
+      {h + row(0.0) + row(0.001, "nan"), ":3: column 2 (q1): expected a finite number, got `nan`"},
+      {h + row(0.0) + row(0.001, "x"), ":3: column 2 (q1): expected a finite number, got `x`"},
+      {h + row(0.0) + row(0.002) + row(0.001), ":4: time must increase"},
+      {h + row(0.0) + "0.001,1,2\n", ":3: expected 22 comma-separated values, got 3"},
+      {h + row(0.0), "expected at least 2 data rows, got 1"},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const std::string path = write_file("bad_" + std::to_string(i) + ".csv", cases[i].text);
+    const std::string message = read_error(path);
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find(cases[i].expected), std::string::npos) << "case " << i << ": " << message;
+  }
+  EXPECT_NE(read_error("/nonexistent/log.csv").find("cannot open"), std::string::npos);
+}
+
+TEST(GapLog, TooShortForTheFilter) {
+  const std::string path = write_file("short.csv", header() + row(0.0) + row(0.001) + row(0.002));
+  try {
+    filter_log(read_log_csv(path), FilterOptions{});
+    FAIL() << "expected LogError";
+  } catch (const LogError& e) {
+    EXPECT_NE(std::string(e.what()).find("too short for the smoothing filter"), std::string::npos) << e.what();
+  }
+}
+
+// Savitzky-Golay of order 3 reproduces cubics exactly: value and derivative at the centre.
+TEST(GapSignal, SavitzkyGolayIsExactOnCubics) {
+  const double dt = 0.001;
+  const SavitzkyGolay filter(25, 3, dt);
+  std::vector<Vector7> series;
+  auto cubic = [](double t, int j) { return 0.3 * j - 1.2 * t + (0.5 + j) * t * t - 2.0 * t * t * t; };
+  auto slope = [](double t, int j) { return -1.2 + 2.0 * (0.5 + j) * t - 6.0 * t * t; };
+  for (int k = 0; k < 101; ++k) {
+    Vector7 v;
+    for (int j = 0; j < 7; ++j) v[j] = cubic(k * dt, j);
+    series.push_back(v);
+  }
+  for (int j = 0; j < 7; ++j) {
+    EXPECT_NEAR(filter.apply(series, 50, 0)[j], cubic(0.05, j), 1e-11);
+    EXPECT_NEAR(filter.apply(series, 50, 1)[j], slope(0.05, j), 1e-8);
+  }
+}
+
+// On a jittered, noise-free excitation log the filtered samples match the analytic trajectory.
+TEST(GapSignal, FilteredSamplesFollowTheTrajectory) {
+  const Model model = diagnosing_model();
+  const double duration = 3.0;
+  const JointLog log = plain_log(model, duration, 7, false);
+  const FilterOptions filter;
+  const Samples s = filter_log(log, filter);
+  const ExcitationTrajectory trajectory(model.parameters().joint_limits, 7);
+  // One sample per period over the log minus half a window at each end.
+  EXPECT_NEAR(static_cast<double>(s.size()), (duration - filter.window) / filter.sample_period, 2.0);
+  double worst_ddq = 0.0, worst_dq = 0.0;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    Vector7 q, dq, ddq;
+    trajectory.state(s.t[k], q, dq, ddq);
+    EXPECT_TRUE(near(s.q[k], q, 2e-3));
+    worst_dq = std::max(worst_dq, (s.dq[k] - dq).cwiseAbs().maxCoeff());
+    worst_ddq = std::max(worst_ddq, (s.ddq[k] - ddq).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst_dq, 5e-3);
+  EXPECT_LT(worst_ddq, 5e-2);  // accelerations up to ~6 rad/s^2
+}
+
+// Y (pi_truth - pi_model) = tau_truth - tau_model for another physical set of link parameters.
+TEST(GapRegressor, LinearInTheStandardParameters) {
+  const Model model = diagnosing_model();
+  const InertialRegressor regressor(model);
+  const InjectedEffects truth = realistic_effect("inertial_parameters", model, 3);
+  ModelParameters p = model.parameters();
+  p.links = *truth.links;
+  const Model true_model(p);
+  Eigen::Matrix<double, kInertialParameters, 1> delta;
+  for (int i = 0; i < kNumJoints; ++i)
+    delta.segment<kLinkParameters>(kLinkParameters * i) =
+        link_parameters(true_model.body(i)) - link_parameters(model.body(i));
+  RandomStates random(5);
+  Data data;
+  for (int s = 0; s < 50; ++s) {
+    const Vector7 q = random.q(model.parameters().joint_limits), dq = random.uniform(2.0), ddq = random.uniform(5.0);
+    Vector7 tau_model, tau_truth;
+    rnea(model, data, q, dq, ddq, tau_model);
+    rnea(true_model, data, q, dq, ddq, tau_truth);
+    EXPECT_TRUE(near(regressor(data, q, dq, ddq) * delta, tau_truth - tau_model, 1e-10));
+  }
+}
+
+// The base columns are independent and every standard column is a combination of them.
+TEST(GapRegressor, BaseParametersSpanTheRegressor) {
+  const Model model = diagnosing_model();
+  const BaseParameters base = base_parameters(model, 1);
+  const BaseParameters other = base_parameters(model, 2);  // other random states
+  const Eigen::Index n = static_cast<Eigen::Index>(base.columns.size());
+  EXPECT_GT(n, 30);
+  EXPECT_LT(n, kInertialParameters);
+  const Eigen::MatrixXd B = other.random_regressor(Eigen::all, base.columns);
+  EXPECT_EQ(B.colPivHouseholderQr().rank(), n);
+  const Eigen::MatrixXd combination = B.colPivHouseholderQr().solve(other.random_regressor);
+  EXPECT_LT((B * combination - other.random_regressor).cwiseAbs().maxCoeff(), 1e-8);
+}
+
+// Each effect, fitted alone on a noise-free log of a truth with exactly that effect, recovers
+// the truth's parameters.
+class GapEffectRecovery : public ::testing::Test {
+ protected:
+  nlohmann::json fit(const std::string& effect, const InjectedEffects& truth) {
+    LogOptions options;
+    options.duration = 8.0;
+    options = noise_free(options);
+    const JointLog train = generate_log(model, truth, 21, 22, options),
+                   heldout = generate_log(model, truth, 23, 24, options);
+    const Diagnosis d = diagnose(model, train, heldout);
+    for (const EffectResult& e : d.effects)
+      if (e.name == effect) {
+        EXPECT_GT(e.explained_fraction, 0.95) << effect;
+        return e.params.at(effect);
+      }
+    ADD_FAILURE() << "no effect " << effect;
+    return {};
+  }
+  Model model = diagnosing_model();
+};
+
+TEST_F(GapEffectRecovery, SensorOffsetArmatureTiltDelay) {
+  InjectedEffects truth;
+  truth.sensor_offset << 0.4, -0.3, 0.2, -0.45, 0.25, -0.2, 0.3;
+  auto offset = fit("sensor_offset", truth).at("offset_Nm").get<std::vector<double>>();
+  for (int j = 0; j < 7; ++j) EXPECT_NEAR(offset[j], truth.sensor_offset[j], 5e-3);
+
+  truth = {};
+  truth.armature << 0.08, 0.05, 0.06, 0.04, 0.03, 0.05, 0.07;
+  auto armature = fit("armature", truth).at("inertia_kgm2").get<std::vector<double>>();
+  for (int j = 0; j < 7; ++j) EXPECT_NEAR(armature[j], truth.armature[j], 2e-3);
+
+  truth = {};
+  truth.tilt_x = 0.8 * M_PI / 180, truth.tilt_y = -0.5 * M_PI / 180;
+  const nlohmann::json tilt = fit("base_tilt", truth);
+  EXPECT_NEAR(tilt.at("about_x_deg").get<double>(), 0.8, 0.01);
+  EXPECT_NEAR(tilt.at("about_y_deg").get<double>(), -0.5, 0.01);
+
+  truth = {};
+  truth.delay = 0.004;
+  EXPECT_NEAR(fit("time_delay", truth).at("delay_ms").get<double>(), 4.0, 0.1);
+}
+
+TEST_F(GapEffectRecovery, PointMassPayload) {
+  InjectedEffects truth;
+  truth.payload.mass = 1.2;
+  truth.payload.com = Vector3(0.02, -0.01, 0.08);
+  const nlohmann::json payload = fit("payload", truth);
+  EXPECT_NEAR(payload.at("mass_kg").get<double>(), 1.2, 2e-3);
+  const auto com = payload.at("com_m").get<std::vector<double>>();
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(com[k], truth.payload.com[k], 1e-3);
+}
+
+// A physical truth with other link parameters: the base-parameter fit explains it and its corrected
+// mass matrix passes the consistency check.
+TEST_F(GapEffectRecovery, InertialParameters) {
+  const nlohmann::json fitted = fit("inertial_parameters", realistic_effect("inertial_parameters", model, 6));
+  EXPECT_EQ(fitted.at("base_parameter_count").get<int>(), static_cast<int>(base_parameters(model).columns.size()));
+  EXPECT_TRUE(fitted.at("mass_matrix_positive_definite").get<bool>());
+}
+
+TEST_F(GapEffectRecovery, GazFrictionLaw) {
+  InjectedEffects truth;
+  truth.friction.type = FrictionModel::Type::kGazSigmoid;
+  truth.friction.phi1 << 0.55, 0.87, 0.64, 1.28, 0.84, 0.30, 0.56;
+  truth.friction.phi2 << 5.1, 9.1, 10.1, 5.6, 8.3, 17.1, 10.3;
+  truth.friction.phi3 << 0.04, 0.026, -0.046, 0.036, 0.026, -0.021, 0.0036;
+  const nlohmann::json f = fit("joint_friction", truth);
+  // The fitted law (not the individual parameters, which trade off) matches the truth's.
+  for (int j = 0; j < 7; ++j)
+    for (double dq = -1.2; dq <= 1.2; dq += 0.1) {
+      Vector7 v = Vector7::Zero();
+      v[j] = dq;
+      const double expected = friction_torque(truth.friction, v)[j];
+      const double fitted = friction_law(f["phi1_Nm"][j], f["phi2_s_per_rad"][j], f["phi3_rad_per_s"][j],
+                                         f["viscous_Nms_per_rad"][j], dq);
+      EXPECT_NEAR(fitted, expected, 0.03) << "joint " << j + 1 << " dq " << dq;
+    }
+}
+
+// The friction effect's analytic Jacobian against central differences of its torque.
+TEST(GapEffects, FrictionJacobianMatchesFiniteDifferences) {
+  const Model model = diagnosing_model();
+  const JointLog log = plain_log(model, 2.0, 3);
+  const Part part = evaluate_part(model, InertialRegressor(model), filter_log(log, FilterOptions{}));
+  const auto library = effect_library(model);
+  const Effect& friction = *library[0];
+  ASSERT_EQ(friction.name(), "joint_friction");
+  Eigen::VectorXd theta(28);
+  std::mt19937_64 engine(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int j = 0; j < 7; ++j)
+    theta.segment<4>(4 * j) << 0.8 + 0.3 * u(engine), 2.0 + u(engine), 0.05 * u(engine), 0.1 * u(engine);
+  const Eigen::MatrixXd J = friction.jacobian(part, theta);
+  for (int k = 0; k < 28; ++k) {
+    Eigen::VectorXd plus = theta, minus = theta;
+    plus[k] += 1e-6, minus[k] -= 1e-6;
+    const Eigen::VectorXd numeric = (friction.torque(part, plus) - friction.torque(part, minus)) / 2e-6;
+    EXPECT_LT((J.col(k) - numeric).cwiseAbs().maxCoeff(), 1e-6) << "parameter " << k;
+  }
+}
+
+TEST(GapDiagnosis, JsonContract) {
+  const Model model = diagnosing_model();
+  const InjectedEffects truth = realistic_effect("sensor_offset", model, 4);
+  LogOptions options;
+  options.duration = 6.0;
+  const nlohmann::json j =
+      to_json(diagnose(model, generate_log(model, truth, 1, 2, options), generate_log(model, truth, 3, 4, options)));
+  EXPECT_EQ(j.at("baseline").at("heldout_rms").size(), 7u);
+  EXPECT_EQ(j.at("baseline").at("train_rms").size(), 7u);
+  ASSERT_EQ(j.at("effects").size(), kEffectNames.size());
+  std::set<std::string> names;
+  for (const auto& e : j.at("effects")) {
+    names.insert(e.at("name").get<std::string>());
+    EXPECT_EQ(e.at("heldout_rms_after").size(), 7u);
+    EXPECT_TRUE(e.at("params").is_object());
+    const double f = e.at("explained_fraction");
+    EXPECT_TRUE(f >= 0.0 && f <= 1.0);
+    EXPECT_TRUE(e.at("significant").is_boolean());
+    for (int joint : e.at("joints")) EXPECT_TRUE(joint >= 1 && joint <= 7);
+  }
+  EXPECT_EQ(names, std::set<std::string>(kEffectNames.begin(), kEffectNames.end()));
+  EXPECT_EQ(j.at("verdict").at("causes"), nlohmann::json::array({"sensor_offset"}));
+  EXPECT_EQ(j.at("verdict").at("heldout_rms_after").size(), 7u);
+  const double unexplained = j.at("verdict").at("unexplained_fraction");
+  EXPECT_TRUE(unexplained > 0.0 && unexplained < 0.5);
+}
+
+// csp gap end to end: a generated log in, the JSON contract and a report out; bad input -> exit 2.
+TEST(GapCommand, RunsOnAGeneratedLogAndRejectsBadInput) {
+  const Model model = diagnosing_model();
+  LogOptions options;
+  options.duration = 8.0;
+  const std::string log = (temp_dir() / "gap_cli.csv").string();
+  write_log_csv(log, generate_log(model, realistic_effect("base_tilt", model, 2), 5, 6, options));
+  const std::string json = (temp_dir() / "gap_cli.json").string(), report = (temp_dir() / "gap_report").string();
+  const std::string command = std::string(CSP_EXECUTABLE) + " gap --log " + log + " --friction none --json " + json +
+                              " --report " + report + " > " + (temp_dir() / "gap_cli.out").string();
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j.at("verdict").at("causes"), nlohmann::json::array({"base_tilt"}));
+  for (const char* file : {"report.md", "torque_heldout.svg", "residual_vs_velocity.svg", "effect_ranking.svg"})
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(report) / file)) << file;
+
+  const std::string err = (temp_dir() / "gap_cli.err").string();
+  const std::string bad = write_file("gap_bad.csv", header() + row(0.0) + row(0.0));
+  EXPECT_EQ(WEXITSTATUS(std::system((std::string(CSP_EXECUTABLE) + " gap --log " + bad + " 2> " + err).c_str())), 2);
+  std::stringstream message;
+  message << std::ifstream(err).rdbuf();
+  EXPECT_NE(message.str().find("csp gap: " + bad + ":3: time must increase"), std::string::npos) << message.str();
+}
+
+}  // namespace
+}  // namespace csp::test
