@@ -160,11 +160,12 @@ TEST(BridgeNet, LcmLogplayerPlaysACspLog) {
   lcm::LCM lcm(url);
   ASSERT_TRUE(lcm.good());
   std::vector<int64_t> ids;
-  struct Handler {
-    std::vector<int64_t>* ids;
-    void on_state(const lcm::ReceiveBuffer*, const std::string&, const robot_state_t* m) { ids->push_back(m->message_id); }
-  } handler{&ids};
-  lcm.subscribe("CSP_STATE", &Handler::on_state, &handler);
+  lcm.subscribeFunction<robot_state_t, std::vector<int64_t>*>(
+      "CSP_STATE",
+      [](const lcm::ReceiveBuffer*, const std::string&, const robot_state_t* m, std::vector<int64_t>* received) {
+        received->push_back(m->message_id);
+      },
+      &ids);
   test::Process player({"/usr/bin/lcm-logplayer", "--lcm-url=" + url, "--speed=1", path}, test::temp_path("player.out"));
   const auto deadline = std::chrono::steady_clock::now() + 10s;
   while (ids.size() < 200 && std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(100);

@@ -25,8 +25,19 @@ void copy_to(const Eigen::MatrixBase<Derived>& from, double (&to)[N]) {
 Client::Client(const std::string& lcm_url, const std::string& channel_prefix, double timeout)
     : channels_(channel_prefix), lcm_(lcm_url), timeout_(timeout) {
   if (!lcm_.good()) throw ClientError("cannot open LCM at `" + lcm_url + "`");
-  lcm_.subscribe(channels_.state, &Client::on_state, this);
-  lcm_.subscribe(channels_.config_reply, &Client::on_reply, this);
+  // Function-pointer subscriptions: GCC 12's UBSan misreports LCM's member-function-pointer call.
+  lcm_.subscribeFunction<robot_state_t, Client*>(
+      channels_.state,
+      [](const lcm::ReceiveBuffer* buffer, const std::string& channel, const robot_state_t* message, Client* client) {
+        client->on_state(buffer, channel, message);
+      },
+      this);
+  lcm_.subscribeFunction<config_reply_t, Client*>(
+      channels_.config_reply,
+      [](const lcm::ReceiveBuffer* buffer, const std::string& channel, const config_reply_t* message, Client* client) {
+        client->on_reply(buffer, channel, message);
+      },
+      this);
 }
 
 void Client::on_state(const lcm::ReceiveBuffer*, const std::string&, const robot_state_t* message) {

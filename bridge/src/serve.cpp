@@ -35,8 +35,12 @@ class Bus {
         [this](const std::string& line) {
           if (!options_.quiet) std::cerr << "csp serve: " << line << '\n';
         });
-    lcm_.subscribe(channels_.command, &Bus::on_message, this);
-    lcm_.subscribe(channels_.config, &Bus::on_message, this);
+    // Function-pointer subscriptions: GCC 12's UBSan misreports LCM's member-function-pointer call.
+    const auto on_message = +[](const lcm::ReceiveBuffer* buffer, const std::string& channel, Bus* bus) {
+      bus->on_message(buffer, channel);
+    };
+    lcm_.subscribeFunction(channels_.command, on_message, this);
+    lcm_.subscribeFunction(channels_.config, on_message, this);
   }
 
   RobotServer& server() { return *server_; }
