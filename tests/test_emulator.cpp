@@ -431,6 +431,31 @@ TEST(EmulatorFaults, ControllerFailureEndsInReflexWithCompleteLog) {
   }
 }
 
+// control_command_success_rate: the share of the last 100 commands received, counted here from
+// what the loop reports cycle by cycle (10 % random losses).
+TEST(EmulatorState, SuccessRateOverTheLast100Commands) {
+  Emulator emulator(matched_settings());
+  rt::Scenario scenario = default_scenario();
+  scenario.controller.trajectory.amplitude.setZero();
+  const auto builtin = rt::make_controller(scenario.controller, {}, emulator);
+  rt::LoopOptions options;
+  options.faults.loss_probability = 0.1;
+  options.max_duration = 0.5;
+  std::vector<bool> received;
+  int checked = 0;
+  options.observer = [&](const rt::RobotState& s, const rt::CycleInfo& c) {
+    received.push_back(c.command_received);
+    if (s.robot_mode != rt::RobotMode::kMove) return;
+    const std::size_t window = std::min<std::size_t>(100, received.size());
+    const auto arrived = std::count(received.end() - static_cast<long>(window), received.end(), true);
+    EXPECT_DOUBLE_EQ(s.control_command_success_rate, static_cast<double>(arrived) / static_cast<double>(window));
+    ++checked;
+  };
+  ASSERT_FALSE(rt::run_motion(emulator, builtin.mode, builtin.controller, options).reflex);
+  EXPECT_GT(checked, 400);
+  EXPECT_EQ(emulator.state().control_command_success_rate, 0.0) << "no motion, no rate";
+}
+
 // The seeded network model: a latency above the cycle budget loses the command.
 TEST(EmulatorFaults, LatencyBeyondBudgetLosesCommands) {
   rt::CommandFaults faults;

@@ -44,7 +44,6 @@ Vector7 default_joint_stiffness() { return (Vector7() << 3000, 3000, 3000, 2500,
 
 Emulator::Emulator(const EmulatorSettings& settings)
     : settings_(settings),
-      plant_parameters_(settings.plant),
       internal_parameters_(settings.internal),
       plant_(settings.plant),
       internal_(settings.internal),
@@ -151,6 +150,7 @@ void Emulator::start_motion(ControlMode mode) {
   consecutive_lost_ = 0;
   received_count_ = 0;
   received_index_ = 0;
+  received_in_window_ = 0;
 }
 
 void Emulator::abort_motion(const std::string& reason) {
@@ -238,9 +238,13 @@ void Emulator::step(const Command* command) {
 
 void Emulator::record_reception(bool received) {
   consecutive_lost_ = received ? 0 : consecutive_lost_ + 1;
+  // A running count over the window: the slot overwritten leaves it, the new cycle enters.
+  const int window = static_cast<int>(received_.size());
+  if (received_count_ == window && received_[received_index_]) --received_in_window_;
   received_[received_index_] = received;
-  received_index_ = (received_index_ + 1) % static_cast<int>(received_.size());
-  received_count_ = std::min(received_count_ + 1, static_cast<int>(received_.size()));
+  if (received) ++received_in_window_;
+  received_index_ = (received_index_ + 1) % window;
+  received_count_ = std::min(received_count_ + 1, window);
 }
 
 // The external joint motion generator: commanded q_c (or dq_c) of this cycle, its finite-difference
@@ -470,9 +474,8 @@ void Emulator::publish() {
   assign_inertia(p.load, s.m_load, s.F_x_Cload, s.I_load);
   assign_inertia(internal_.total_flange_load(), s.m_total, s.F_x_Ctotal, s.I_total);
 
-  int received = 0;
-  for (int i = 0; i < received_count_; ++i) received += received_[i] ? 1 : 0;
-  s.control_command_success_rate = mode_ && received_count_ > 0 ? static_cast<double>(received) / received_count_ : 0.0;
+  s.control_command_success_rate =
+      mode_ && received_count_ > 0 ? static_cast<double>(received_in_window_) / received_count_ : 0.0;
 }
 
 }  // namespace csp::rt

@@ -138,7 +138,7 @@ class Emulator {
   void publish();
 
   EmulatorSettings settings_;
-  ModelParameters plant_parameters_, internal_parameters_;
+  ModelParameters internal_parameters_;   // the robot's model before setEE (setLoad and setK change it)
   Model plant_, internal_;
   Data plant_data_, internal_data_;
   Transform F_T_NE_, NE_T_EE_;   // configured end effector, and setEE on top of it
@@ -156,7 +156,7 @@ class Emulator {
   bool first_command_ = true;
   int consecutive_lost_ = 0;
   std::array<bool, 100> received_{};   // the last 100 cycles (control_command_success_rate)
-  int received_index_ = 0, received_count_ = 0;
+  int received_index_ = 0, received_count_ = 0, received_in_window_ = 0;
   // Sensors and estimators
   Vector7 tau_J_measured_, tau_J_measured_previous_, dtau_J_, dq_previous_, tau_ext_raw_, tau_ext_filtered_;
   Matrix6x7 jacobian_;
