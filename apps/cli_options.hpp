@@ -8,7 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "csp/dynamics/robot_config.hpp"
+#include "csp/io/robot_config.hpp"
 #include "csp/rt/scenario.hpp"
 
 namespace csp::cli {

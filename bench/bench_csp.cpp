@@ -26,7 +26,7 @@
 
 #include "bench_common.hpp"
 #include "csp/dynamics/algorithms.hpp"
-#include "csp/dynamics/robot_config.hpp"
+#include "csp/io/robot_config.hpp"
 
 namespace csp::bench {
 namespace {

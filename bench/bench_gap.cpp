@@ -3,7 +3,7 @@
 // and a sensor offset, the real log's noise), so the diagnosis runs its full forward selection.
 #include <benchmark/benchmark.h>
 
-#include "csp/dynamics/robot_config.hpp"
+#include "csp/io/robot_config.hpp"
 #include "csp/gap/diagnosis.hpp"
 #include "csp/gap/generator.hpp"
 

@@ -11,7 +11,7 @@
 #include <unistd.h>
 
 #include "csp/dynamics/algorithms.hpp"
-#include "csp/dynamics/robot_config.hpp"
+#include "csp/io/robot_config.hpp"
 
 namespace csp::test {
 

@@ -1,5 +1,6 @@
 #include "csp/dynamics/model.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <stdexcept>
 
@@ -83,6 +84,16 @@ Vector7 JointLimits::dq_lower(const Vector7& q) const {
     lower[i] = std::max(-dq_max[i], std::min(0.0, dq_offset[i] - braking));
   }
   return lower;
+}
+
+bool is_physical_inertia(const Matrix3& I) {
+  if (!I.isApprox(I.transpose(), 1e-12)) return false;
+  const Vector3 moments = Eigen::SelfAdjointEigenSolver<Matrix3>(I, Eigen::EigenvaluesOnly).eigenvalues();
+  if (moments.minCoeff() <= 0.0) return false;
+  const double sum = moments.sum();
+  for (int k = 0; k < 3; ++k)
+    if (moments[k] > sum - moments[k] + 1e-12 * sum) return false;
+  return true;
 }
 
 }  // namespace csp

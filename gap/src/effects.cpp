@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "csp/dynamics/algorithms.hpp"
-#include "csp/dynamics/robot_config.hpp"
+#include "csp/dynamics/model.hpp"
 
 namespace csp::gap {
 

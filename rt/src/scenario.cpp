@@ -3,7 +3,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "csp/dynamics/yaml_field.hpp"
+#include "csp/io/yaml_field.hpp"
 
 namespace csp::rt {
 namespace {

@@ -158,4 +158,7 @@ struct Data {
 using LinkWrenches = std::array<Vector6, kNumJoints>;
 extern const LinkWrenches kNoLinkWrenches;
 
+// Positive definite and triangle inequality of the principal moments (a physical rigid body).
+bool is_physical_inertia(const Matrix3& inertia_about_com);
+
 }  // namespace csp

@@ -1,11 +1,10 @@
-#include "csp/dynamics/robot_config.hpp"
+#include "csp/io/robot_config.hpp"
 
 #include <cmath>
 #include <filesystem>
 
-#include <Eigen/Eigenvalues>
 
-#include "csp/dynamics/yaml_field.hpp"
+#include "csp/io/yaml_field.hpp"
 
 namespace csp {
 namespace {
@@ -141,16 +140,6 @@ YAML::Node load_yaml_file(const std::string& path, const std::string& what) {
   } catch (const std::exception& e) {   // e.g. an I/O error while reading
     throw ConfigError(path + ": cannot read the " + what + ": " + e.what());
   }
-}
-
-bool is_physical_inertia(const Matrix3& I) {
-  if (!I.isApprox(I.transpose(), 1e-12)) return false;
-  const Vector3 moments = Eigen::SelfAdjointEigenSolver<Matrix3>(I, Eigen::EigenvaluesOnly).eigenvalues();
-  if (moments.minCoeff() <= 0.0) return false;
-  const double sum = moments.sum();
-  for (int k = 0; k < 3; ++k)
-    if (moments[k] > sum - moments[k] + 1e-12 * sum) return false;
-  return true;
 }
 
 RobotConfig load_robot_config(const std::string& path) {

@@ -10,7 +10,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "csp/dynamics/robot_config.hpp"
+#include "csp/io/robot_config.hpp"
 
 namespace csp {
 

@@ -56,7 +56,4 @@ struct ModelOptions {
 
 ModelParameters model_parameters(const RobotConfig& config, const ModelOptions& options);
 
-// Positive definite and triangle inequality of the principal moments (a physical rigid body).
-bool is_physical_inertia(const Matrix3& inertia_about_com);
-
 }  // namespace csp
