@@ -87,7 +87,7 @@ class Process {
 inline std::vector<robot_state_t> states_in_log(const std::string& path, const std::string& channel = "CSP_STATE") {
   bridge::LogReader log(path);
   std::vector<robot_state_t> states;
-  for (const lcm::LogEvent* e = log.next(); e; e = log.next()) {
+  for (const bridge::LogEvent* e = log.next(); e; e = log.next()) {
     if (e->channel != channel) continue;
     robot_state_t m;
     if (bridge::decode_exact(e->data, e->datalen, m) != bridge::Rejection::kNone) throw std::runtime_error("bad state in " + path);

@@ -23,7 +23,7 @@ const std::string kScenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/
 std::vector<status_t> statuses_in_log(const std::string& path) {
   LogReader log(path);
   std::vector<status_t> statuses;
-  for (const lcm::LogEvent* e = log.next(); e; e = log.next()) {
+  for (const LogEvent* e = log.next(); e; e = log.next()) {
     status_t s;
     if (e->channel == "CSP_STATUS" && decode_exact(e->data, e->datalen, s) == Rejection::kNone) statuses.push_back(s);
   }
@@ -112,7 +112,7 @@ bool wait_until_logged(lcm::LCM& lcm, const std::string& path, const std::string
     std::this_thread::sleep_for(50ms);
     if (!std::filesystem::exists(path)) continue;
     LogReader log(path);   // a partly written last event reads as the end of the log
-    for (const lcm::LogEvent* e = log.next(); e; e = log.next())
+    for (const LogEvent* e = log.next(); e; e = log.next())
       if (e->channel == "TEST_MARKER" && std::string(static_cast<const char*>(e->data), e->datalen) == marker) return true;
   }
   return false;

@@ -48,7 +48,7 @@ ExportReport export_csv(const std::string& log_path, const std::string& csv_path
   rt::CsvLog csv(csv_path);
   ExportReport report;
   std::optional<robot_state_t> last;
-  for (const lcm::LogEvent* event = log.next(); event; event = log.next()) {
+  for (const LogEvent* event = log.next(); event; event = log.next()) {
     if (event->channel != state_channel) continue;
     robot_state_t m;
     if (decode_exact(event->data, event->datalen, m) != Rejection::kNone) {

@@ -25,6 +25,15 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
   if (!out) throw std::runtime_error(path.string() + ": cannot write the file");
 }
 
+constexpr uint32_t kSyncWord = 0xEDA1DA01;
+constexpr uint64_t kHeaderBytes = 4 + 8 + 8 + 4 + 4;
+
+uint64_t big_endian(const uint8_t* bytes, int count) {
+  uint64_t value = 0;
+  for (int i = 0; i < count; ++i) value = (value << 8) | bytes[i];
+  return value;
+}
+
 }  // namespace
 
 LogWriter::LogWriter(const std::string& path) : path_(path), file_(std::make_unique<lcm::LogFile>(path, "w")) {
@@ -50,9 +59,83 @@ uint64_t LogWriter::count(const std::string& channel) const {
 void LogWriter::flush() { std::fflush(file_->getFilePtr()); }
 
 LogReader::LogReader(const std::string& path) : path_(path) {
-  if (!std::filesystem::is_regular_file(path)) throw std::runtime_error(path + ": no such LCM log file");
-  file_ = std::make_unique<lcm::LogFile>(path, "r");
-  if (!file_->good()) throw std::runtime_error(path + ": cannot read the LCM log");
+  // A FIFO or a device would block or never end: only regular files are logs.
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) throw std::runtime_error(path + ": no such LCM log file");
+  size_ = std::filesystem::file_size(path, error);
+  file_ = error ? nullptr : std::fopen(path.c_str(), "rb");
+  if (!file_) throw std::runtime_error(path + ": cannot read the LCM log");
+}
+
+LogReader::~LogReader() { std::fclose(file_); }
+
+std::string LogReader::read_header() {
+  uint8_t header[kHeaderBytes];
+  if (size_ - offset_ < kHeaderBytes) return "a header cut short (" + std::to_string(size_ - offset_) + " of 28 bytes)";
+  if (std::fseek(file_, static_cast<long>(offset_), SEEK_SET) != 0 || std::fread(header, 1, kHeaderBytes, file_) != kHeaderBytes)
+    return "a read error";
+  if (big_endian(header, 4) != kSyncWord) return "no sync word";
+  const auto channel_length = static_cast<int32_t>(big_endian(header + 20, 4));
+  const auto data_length = static_cast<int32_t>(big_endian(header + 24, 4));
+  if (channel_length < 1 || channel_length > LCM_MAX_CHANNEL_NAME_LENGTH)
+    return "channel length " + std::to_string(channel_length) + " outside 1.." + std::to_string(LCM_MAX_CHANNEL_NAME_LENGTH);
+  if (data_length < 0) return "negative data length " + std::to_string(data_length);
+  const uint64_t remaining = size_ - offset_ - kHeaderBytes;
+  if (static_cast<uint64_t>(channel_length) + static_cast<uint64_t>(data_length) > remaining)
+    return "channel and data (" + std::to_string(channel_length) + " + " + std::to_string(data_length) +
+           " bytes) run past the end of the file (" + std::to_string(remaining) + " bytes left)";
+  event_.eventnum = static_cast<int64_t>(big_endian(header + 4, 8));
+  event_.timestamp = static_cast<int64_t>(big_endian(header + 12, 8));
+  event_.channel.resize(static_cast<std::size_t>(channel_length));
+  data_.resize(static_cast<std::size_t>(data_length));
+  event_.datalen = data_length;
+  if (std::fread(event_.channel.data(), 1, event_.channel.size(), file_) != event_.channel.size() ||
+      std::fread(data_.data(), 1, data_.size(), file_) != data_.size())
+    return "a read error";
+  event_.data = data_.data();
+  return {};
+}
+
+uint64_t LogReader::resynchronise(uint64_t offset) {
+  for (uint64_t candidate = offset + 1; candidate + kHeaderBytes <= size_; ++candidate) {
+    uint8_t word[4];
+    if (std::fseek(file_, static_cast<long>(candidate), SEEK_SET) != 0 || std::fread(word, 1, 4, file_) != 4) break;
+    if (big_endian(word, 4) != kSyncWord) continue;
+    offset_ = candidate;
+    if (read_header().empty()) return candidate;
+  }
+  return size_;
+}
+
+const LogEvent* LogReader::next() {
+  if (offset_ >= size_) return nullptr;
+  const std::string problem = read_header();
+  if (!problem.empty()) {
+    const uint64_t damaged_at = offset_;
+    const uint64_t resumed = resynchronise(damaged_at);
+    damage_.push_back({damaged_at, resumed - damaged_at, problem});
+    offset_ = resumed;
+    if (resumed >= size_) return nullptr;
+  }
+  offset_ += kHeaderBytes + event_.channel.size() + data_.size();
+  ++events_;
+  return &event_;
+}
+
+std::string LogReader::damage_summary() const {
+  if (damage_.empty()) return {};
+  uint64_t skipped = 0;
+  for (const LogDamage& d : damage_) skipped += d.bytes_skipped;
+  std::string text = path_ + ": damaged log: " + std::to_string(skipped) + " of " + std::to_string(size_) + " bytes skipped (";
+  for (std::size_t i = 0; i < damage_.size(); ++i) {
+    if (i == 3) {
+      text += "; and " + std::to_string(damage_.size() - 3) + " more";
+      break;
+    }
+    text += (i ? "; " : "") + std::string("at byte ") + std::to_string(damage_[i].offset) + ": " + damage_[i].what + ", " +
+            std::to_string(damage_[i].bytes_skipped) + " bytes skipped";
+  }
+  return text + ")";
 }
 
 scenario_t scenario_message(const rt::Scenario& scenario, const std::string& channel_prefix) {
