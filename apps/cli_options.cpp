@@ -83,7 +83,8 @@ void ScenarioArguments::add_to(CLI::App& command, const std::string& clock_help)
 rt::Scenario ScenarioArguments::load() const {
   rt::Scenario s = rt::load_scenario(scenario.empty() ? rt::default_scenario_path() : scenario);
   if (duration) {
-    if (!(*duration > 0.0) || !std::isfinite(*duration)) throw UsageError("--duration: expected a positive number of seconds");
+    if (!(*duration > 0.0) || !(*duration <= rt::kMaxDuration))
+      throw UsageError("--duration: expected a positive number of seconds, at most a year (" + std::to_string(static_cast<int64_t>(rt::kMaxDuration)) + ")");
     s.duration = *duration;
   }
   if (!clock.empty()) s.clock = clock == "realtime" ? rt::Clock::kRealtime : rt::Clock::kLockstep;

@@ -1,7 +1,9 @@
 // csp log export / import: LCM logs <-> the CSV layout of the real Panda data.
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "csp/bridge/csv_convert.hpp"
 
@@ -28,6 +30,10 @@ Command add_log_command(CLI::App& app) {
     sub->add_option("--channel", args->channel, "Channel of the robot states")->capture_default_str();
   }
   return [args, to_csv] {
+    // Opening the output truncates it: writing over the input would destroy what is being read.
+    std::error_code error;
+    if (std::filesystem::equivalent(args->input, args->out, error))
+      throw UsageError("--out: `" + args->out + "` is the input file; choose another output file");
     if (to_csv->parsed()) {
       const bridge::ExportReport r = bridge::export_csv(args->input, args->out, args->channel);
       std::printf("csp log export: %llu rows to %s (%llu repeated states skipped, %llu undecodable events)\n",

@@ -1,4 +1,5 @@
 // csp model: model quantities at one state, as one JSON object (a contract other tools rely on).
+#include <cmath>
 #include <iostream>
 
 #include <nlohmann/json.hpp>
@@ -61,6 +62,11 @@ Command add_model_command(CLI::App& app) {
         {"friction", column_major(friction)},
         {"tau_total", column_major(Vector7(tau + friction))},
     };
+    // JSON has no inf or NaN (nlohmann writes null): a result that overflowed is an input error.
+    for (const auto& [key, values] : out.items())
+      for (const auto& v : values)
+        if (!std::isfinite(v.get<double>()))
+          throw UsageError(key + " is not finite at this state (the inputs are too large for double precision)");
     std::cout << out.dump() << '\n';
     return 0;
   };

@@ -401,6 +401,24 @@ TEST(CliErrors, BrokenRobotFileNamesFileAndKey) {
                       {path, "limits.joint.sets.franka_docs.dddq_maxx", "no such key"}});
 }
 
+// Converting a file onto itself would truncate the input before reading it.
+TEST(CliErrors, LogConversionRefusesToOverwriteItsInput) {
+  const std::string csv = (temp_dir() / "self.csv").string();
+  std::filesystem::copy_file(std::string(CSP_SHARED_DATA_DIR) + "/real/panda_exciting_traj_1.csv", csv,
+                             std::filesystem::copy_options::overwrite_existing);
+  const auto size = std::filesystem::file_size(csv);
+  expect_usage_error({{"log", "import", csv, "--out", csv}, {"--out", "is the input file"}});
+  expect_usage_error({{"log", "export", csv, "--out", (temp_dir() / "." / "self.csv").string()}, {"is the input file"}});
+  EXPECT_EQ(std::filesystem::file_size(csv), size);
+}
+
+// Finite but absurd inputs overflow: the contract has no inf or NaN (JSON would print null).
+TEST(CliErrors, ResultsThatOverflowAreNamed) {
+  expect_usage_error({{"model", "--q", kQ, "--dq", "1e200,0,0,0,0,0,0"}, {"not finite", "too large"}});
+  expect_usage_error({{"model", "--q", kQ, "--gravity", "0,0,-1e308", "--ddq", "1e308,1e308,1e308,1e308,1e308,1e308,1e308"},
+                      {"not finite"}});
+}
+
 TEST(CliErrors, BadLoads) {
   expect_usage_error({{"model", "--q", kQ, "--load-com", "0,0,0.1"}, {"--load-com", "--load-mass"}});
   expect_usage_error({{"model", "--q", kQ, "--load-inertia", "0.1,0,0,0.1,0,0.1"}, {"--load-inertia", "--load-mass"}});

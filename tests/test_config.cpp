@@ -754,6 +754,19 @@ TEST(ConfigValidation, InvalidYaml) {
   expect_rejected({{"\n  flange:", "\n\tflange:"}}, {"not valid YAML"}, "tab.yaml");
 }
 
+// A key given twice would otherwise keep its first value silently (yaml-cpp looks keys up by
+// their first occurrence); a second document would be ignored.
+TEST(ConfigValidation, KeyGivenTwiceAndSecondDocumentAreRejected) {
+  const std::string twice = expect_rejected({{"name: panda", "name: panda\nname: fr3"}}, {"name: key given twice", "(line "},
+                                            "key_twice.yaml");
+  EXPECT_EQ(reported_line(twice), line_of("name: panda") + 1) << twice;
+  expect_rejected({{"  flange: {a: 0.0, d: 0.107, alpha: 0.0}", "  flange: {a: 0.0, d: 0.107, alpha: 0.0, d: 0.2}"}},
+                  {"kinematics.flange.d: key given twice"}, "nested_key_twice.yaml");
+  const std::string path = write_temp("two_documents.yaml", read_text(robot_file("panda")) + "\n---\nname: other\n");
+  const std::string message = load_error_at(path);
+  EXPECT_NE(message.find(path + ": expected one YAML document, found 2"), std::string::npos) << message;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Unknown set names in ModelOptions list what is available.
 

@@ -537,9 +537,17 @@ TEST(EmulatorScenario, BadFilesRejectedClearly) {
   expect_rejected("name: x\nplant: {inertia: nope}\ninitial_q: [0, -0.7, 0, -2.3, 0, 1.5, 0.7]\nduration: 1\ncontroller: {type: float}\n",
                   "unknown inertial set `nope`");
   expect_rejected(ok + "controller: {type: float}\nexternal_wrenches: [{link: 9, start: 0, end: 1}]\n",
-                  "external_wrenches[0].link: expected a link number from 1 to 7");
+                  "external_wrenches[0].link: expected a whole number from 1 to 7");
   expect_rejected(ok + "controller: {type: float}\nfaults: {lost_command_bursts: [{at: 1, count: 0.5}]}\n",
-                  "count: expected a positive whole number");
+                  "count: expected a whole number from 1 to 86400000");
+  // Numbers that would overflow an integer conversion (float-cast-overflow) are refused by range.
+  expect_rejected(ok + "controller: {type: float}\nfaults: {lost_command_bursts: [{at: 1, count: 1e18}]}\n",
+                  "count: expected a whole number from 1 to 86400000");
+  expect_rejected(ok + "controller: {type: float}\nseed: 1e30\n", "seed: expected a whole number from 0 to");
+  expect_rejected("name: x\nplant: {inertia: gaz2019}\ninitial_q: [0, -0.7, 0, -2.3, 0, 1.5, 0.7]\nduration: 1e300\ncontroller: {type: float}\n",
+                  "duration: expected at most 31536000 s");
+  // A key given twice no longer keeps its first value silently.
+  expect_rejected(ok + "controller: {type: float}\nduration: 0.5\n", "duration: key given twice");
   expect_rejected("name: x\nplant: {inertia: gaz2019}\ninitial_q: [0, -0.7, 0, -2.3, 0, 1.5, 0.7]\nduration: -1\ncontroller: {type: float}\n",
                   "duration: expected a positive number");
 }

@@ -93,9 +93,7 @@ void read_robot_settings(const Field& f, EmulatorSettings& s) {
   f.allow_only({"substeps", "torque_loop_bandwidth_hz", "tau_ext_cutoff_hz", "power_limit", "gravity_compensation",
                 "tau_J_noise", "tau_J_bias", "joint_impedance", "collision_behavior"});
   if (f.has("substeps")) {
-    const double n = f["substeps"].number();
-    if (n < 1 || n > 100 || n != std::floor(n)) f["substeps"].fail("a whole number from 1 to 100");
-    s.substeps = static_cast<int>(n);
+    s.substeps = static_cast<int>(f["substeps"].whole_number(1, 100));
   }
   if (f.has("torque_loop_bandwidth_hz")) s.torque_loop_bandwidth_hz = positive(f["torque_loop_bandwidth_hz"]);
   if (f.has("tau_ext_cutoff_hz")) s.tau_ext_cutoff_hz = positive(f["tau_ext_cutoff_hz"]);
@@ -137,9 +135,8 @@ void read_faults(const Field& f, Scenario& scenario) {
     for (std::size_t i = 0; i < bursts.sequence_size(); ++i) {
       const Field b = bursts[i];
       b.allow_only({"at", "count"});
-      const double count = b["count"].number();
-      if (count < 1 || count != std::floor(count)) b["count"].fail("a positive whole number");
-      faults.bursts.push_back({non_negative(b["at"]), static_cast<int>(count)});
+      // At most a day of lost commands: a longer burst is an outage, not a fault to emulate.
+      faults.bursts.push_back({non_negative(b["at"]), static_cast<int>(b["count"].whole_number(1, 86'400'000))});
     }
   }
   if (f.has("controller_throws_at")) scenario.controller_faults.throw_at = non_negative(f["controller_throws_at"]);
@@ -149,9 +146,7 @@ void read_faults(const Field& f, Scenario& scenario) {
 ExternalWrench read_wrench(const Field& f) {
   f.allow_only({"link", "point", "force", "moment", "start", "end", "ramp"});
   ExternalWrench w;
-  const double link = f["link"].number();
-  if (link < 1 || link > kNumJoints || link != std::floor(link)) f["link"].fail("a link number from 1 to 7");
-  w.link = static_cast<int>(link);
+  w.link = static_cast<int>(f["link"].whole_number(1, kNumJoints));
   if (f.has("point")) w.point = f["point"].vector<3>();
   if (f.has("force")) w.force = f["force"].vector<3>();
   if (f.has("moment")) w.moment = f["moment"].vector<3>();
@@ -232,15 +227,15 @@ Scenario load_scenario(const std::string& path) {
       top["initial_q"].fail("a pose inside the joint limits (joint " + std::to_string(i + 1) + " is not)");
 
   s.duration = positive(top["duration"]);
+  if (s.duration > kMaxDuration) top["duration"].fail("at most " + std::to_string(static_cast<int64_t>(kMaxDuration)) + " s (a year)");
   if (top.has("clock")) {
     const std::string clock = top["clock"].text();
     if (clock != "lockstep" && clock != "realtime") top["clock"].fail("lockstep or realtime");
     s.clock = clock == "lockstep" ? Clock::kLockstep : Clock::kRealtime;
   }
   if (top.has("seed")) {
-    const double seed = top["seed"].number();
-    if (seed < 0 || seed != std::floor(seed) || seed > 9.0e15) top["seed"].fail("a non-negative whole number");
-    s.seed = static_cast<uint64_t>(seed);
+    // Up to 2^53: every such seed is exact in a YAML number read as double.
+    s.seed = static_cast<uint64_t>(top["seed"].whole_number(0, int64_t{1} << 53));
   }
   if (top.has("robot_settings")) read_robot_settings(top["robot_settings"], s.emulator);
   read_controller(top["controller"], s.controller);

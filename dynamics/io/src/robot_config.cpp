@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <set>
 
 
 #include "csp/io/yaml_field.hpp"
@@ -128,11 +129,36 @@ std::vector<std::string> names_of(const Map& map, const char* implicit = nullptr
 
 }  // namespace
 
+namespace {
+
+// yaml-cpp keeps every pair of a mapping but looks keys up by their first occurrence, so a key
+// written twice would silently ignore its second value (appending `duration: 0.5` to a scenario
+// would not change it).
+void reject_duplicate_keys(const YAML::Node& node, const std::string& path, const std::string& key_path) {
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) reject_duplicate_keys(node[i], path, key_path + "[" + std::to_string(i) + "]");
+    return;
+  }
+  if (!node.IsMap()) return;
+  std::set<std::string> seen;
+  for (const auto& item : node) {
+    const std::string key = item.first.Scalar();
+    const std::string child_path = key_path.empty() ? key : key_path + "." + key;
+    if (!seen.insert(key).second)
+      throw ConfigError(path + ": " + child_path + ": key given twice (line " + std::to_string(item.first.Mark().line + 1) +
+                        "); expected each key once");
+    reject_duplicate_keys(item.second, path, child_path);
+  }
+}
+
+}  // namespace
+
 YAML::Node load_yaml_file(const std::string& path, const std::string& what) {
   if (!std::filesystem::is_regular_file(path))
     throw ConfigError(path + ": cannot open the " + what + " (missing, or not a regular file)");
+  std::vector<YAML::Node> documents;
   try {
-    return YAML::LoadFile(path);
+    documents = YAML::LoadAllFromFile(path);
   } catch (const YAML::BadFile&) {
     throw ConfigError(path + ": cannot open the " + what);
   } catch (const YAML::Exception& e) {
@@ -140,6 +166,12 @@ YAML::Node load_yaml_file(const std::string& path, const std::string& what) {
   } catch (const std::exception& e) {   // e.g. an I/O error while reading
     throw ConfigError(path + ": cannot read the " + what + ": " + e.what());
   }
+  if (documents.size() > 1)
+    throw ConfigError(path + ": expected one YAML document, found " + std::to_string(documents.size()) +
+                      " (the second starts at line " + std::to_string(documents[1].Mark().line + 1) + ")");
+  const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
+  reject_duplicate_keys(root, path, "");
+  return root;
 }
 
 RobotConfig load_robot_config(const std::string& path) {

@@ -43,6 +43,10 @@ struct ControllerFaults {
   std::optional<double> nan_at;     // the controller returns NaN
 };
 
+// The longest run a scenario or --duration may ask for [s]: a year of 1 kHz cycles still counts
+// exactly in every integer and double the loop uses.
+inline constexpr double kMaxDuration = 365.0 * 86400.0;
+
 struct Scenario {
   std::string path;
   std::string name;
@@ -51,7 +55,7 @@ struct Scenario {
   ControllerSpec controller;
   ControllerFaults controller_faults;
   CommandFaults command_faults;
-  double duration = 10.0;   // [s]
+  double duration = 10.0;   // [s], at most kMaxDuration
   Clock clock = Clock::kLockstep;
   uint64_t seed = 1;
 };

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <initializer_list>
 #include <set>
 #include <string>
@@ -73,6 +74,15 @@ class Field {
     if (!node_.IsScalar() || !YAML::convert<double>::decode(node_, value)) fail("a number");
     if (!std::isfinite(value)) fail("a finite number");
     return value;
+  }
+
+  // A whole number in [min, max]; checked as a double first, so that 1e18 or 1.5 never reaches an
+  // integer conversion.
+  int64_t whole_number(int64_t min, int64_t max) const {
+    const double value = number();
+    if (value != std::floor(value) || value < static_cast<double>(min) || value > static_cast<double>(max))
+      fail("a whole number from " + std::to_string(min) + " to " + std::to_string(max));
+    return static_cast<int64_t>(value);
   }
 
   bool boolean() const {
