@@ -754,6 +754,14 @@ TEST(ConfigValidation, InvalidYaml) {
   expect_rejected({{"\n  flange:", "\n\tflange:"}}, {"not valid YAML"}, "tab.yaml");
 }
 
+// Finite but absurd numbers are named where they are written, not found later as a non-finite torque.
+TEST(ConfigValidation, AbsurdMagnitudesAreRejected) {
+  expect_rejected({{"{a: 0.0, d: 0.333, alpha: 0.0, theta_offset: 0.0}", "{a: 0.0, d: 1e200, alpha: 0.0, theta_offset: 0.0}"}},
+                  {"kinematics", ".d: expected a length within +-10 m"}, "huge_length.yaml");
+  expect_rejected({{"{a: 0.0, d: 0.333, alpha: 0.0, theta_offset: 0.0}", "{a: 0.0, d: 0.333, alpha: 1e9, theta_offset: 0.0}"}},
+                  {".alpha: expected an angle within +-2 pi rad"}, "huge_angle.yaml");
+}
+
 // A key given twice would otherwise keep its first value silently (yaml-cpp looks keys up by
 // their first occurrence); a second document would be ignored.
 TEST(ConfigValidation, KeyGivenTwiceAndSecondDocumentAreRejected) {

@@ -546,6 +546,8 @@ TEST(EmulatorScenario, BadFilesRejectedClearly) {
   expect_rejected(ok + "controller: {type: float}\nseed: 1e30\n", "seed: expected a whole number from 0 to");
   expect_rejected("name: x\nplant: {inertia: gaz2019}\ninitial_q: [0, -0.7, 0, -2.3, 0, 1.5, 0.7]\nduration: 1e300\ncontroller: {type: float}\n",
                   "duration: expected at most 31536000 s");
+  expect_rejected("name: x\nplant: {inertia: gaz2019, load: {mass: 1, com: [0, 0, 1e300]}}\ninitial_q: [0, -0.7, 0, -2.3, 0, 1.5, 0.7]\nduration: 1\ncontroller: {type: float}\n",
+                  "plant.load.com: expected a centre of mass within 10 m");
   // A key given twice no longer keeps its first value silently.
   expect_rejected(ok + "controller: {type: float}\nduration: 0.5\n", "duration: key given twice");
   expect_rejected("name: x\nplant: {inertia: gaz2019}\ninitial_q: [0, -0.7, 0, -2.3, 0, 1.5, 0.7]\nduration: -1\ncontroller: {type: float}\n",

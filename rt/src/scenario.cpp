@@ -32,20 +32,6 @@ double non_negative(const Field& f) {
   return v;
 }
 
-RigidBodyInertia load(const Field& f) {
-  f.allow_only({"mass", "com", "inertia"});
-  RigidBodyInertia body;
-  body.mass = non_negative(f["mass"]);
-  if (f.has("com")) body.com = f["com"].vector<3>();
-  if (f.has("inertia")) {
-    const Vector6 v = f["inertia"].vector<6>();   // xx, xy, xz, yy, yz, zz about the CoM
-    body.inertia << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
-    if (body.mass > 0.0 && body.inertia != Matrix3::Zero() && !is_physical_inertia(body.inertia))
-      f["inertia"].fail("a physical inertia (positive definite, triangle inequality)");
-  }
-  return body;
-}
-
 // plant / robot_model: which named sets of the robot file, and the load.
 ModelOptions model_options(const Field& f, const std::string& end_effector, const std::string& joint_limits) {
   ModelOptions options;
@@ -53,7 +39,7 @@ ModelOptions model_options(const Field& f, const std::string& end_effector, cons
   options.joint_limits = joint_limits;
   if (f.has("inertia")) options.inertia = f["inertia"].text();
   if (f.has("friction")) options.friction = f["friction"].text();
-  if (f.has("load")) options.load = load(f["load"]);
+  if (f.has("load")) options.load = flange_load(f["load"]);
   return options;
 }
 
@@ -214,7 +200,7 @@ Scenario load_scenario(const std::string& path) {
     const Field internal = top["robot_model"];
     internal.allow_only({"inertia", "load"});
     if (internal.has("inertia")) internal_options.inertia = internal["inertia"].text();
-    if (internal.has("load")) internal_options.load = load(internal["load"]);
+    if (internal.has("load")) internal_options.load = flange_load(internal["load"]);
     s.emulator.internal = build_model(config, internal_options, internal);
   } else {
     s.emulator.internal = build_model(config, internal_options, top);

@@ -4,22 +4,52 @@
 #include <filesystem>
 #include <set>
 
-
 #include "csp/io/yaml_field.hpp"
 
 namespace csp {
 namespace {
 
+// Bounds far outside any arm CSP models, so that a typo such as 1e200 is named where it is
+// written instead of surfacing later as a non-finite torque.
+constexpr double kMaxLength = 10.0;     // [m]: link lengths, offsets, CoM distances
+constexpr double kMaxMass = 1000.0;     // [kg]
+constexpr double kMaxInertia = 1000.0;  // [kg m^2], any tensor entry
+
+double length(const Field& field) {
+  const double v = field.number();
+  if (std::abs(v) > kMaxLength) field.fail("a length within +-" + std::to_string(static_cast<int>(kMaxLength)) + " m");
+  return v;
+}
+
+double angle(const Field& field) {
+  const double v = field.number();
+  if (std::abs(v) > 2.0 * M_PI) field.fail("an angle within +-2 pi rad");
+  return v;
+}
+
 Matrix3 inertia_tensor(const Field& field) {
   const Eigen::Matrix<double, 6, 1> v = field.vector<6>();   // xx, xy, xz, yy, yz, zz
+  if (v.cwiseAbs().maxCoeff() > kMaxInertia) field.fail("inertia entries within +-1000 kg m^2");
   Matrix3 I;
   I << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
   return I;
 }
 
+Vector3 center_of_mass(const Field& field) {
+  const Vector3 c = field.vector<3>();
+  if (c.norm() > kMaxLength) field.fail("a centre of mass within 10 m of the frame");
+  return c;
+}
+
+double mass(const Field& field) {
+  const double m = field.number();
+  if (m > kMaxMass) field.fail("a mass of at most 1000 kg");
+  return m;
+}
+
 RigidBodyInertia rigid_body(const Field& field, bool require_physical) {
   field.allow_only({"mass", "com", "inertia"});
-  RigidBodyInertia body{field["mass"].number(), field["com"].vector<3>(), inertia_tensor(field["inertia"])};
+  RigidBodyInertia body{mass(field["mass"]), center_of_mass(field["com"]), inertia_tensor(field["inertia"])};
   if (body.mass <= 0.0) field["mass"].fail("a positive mass");
   if (require_physical && !is_physical_inertia(body.inertia))
     field["inertia"].fail("a positive-definite inertia satisfying the triangle inequality "
@@ -30,8 +60,7 @@ RigidBodyInertia rigid_body(const Field& field, bool require_physical) {
 MdhParameters mdh_row(const Field& field, bool with_offset) {
   if (with_offset) field.allow_only({"a", "d", "alpha", "theta_offset"});
   else field.allow_only({"a", "d", "alpha"});
-  return {field["a"].number(), field["d"].number(), field["alpha"].number(),
-          with_offset ? field["theta_offset"].number() : 0.0};
+  return {length(field["a"]), length(field["d"]), angle(field["alpha"]), with_offset ? angle(field["theta_offset"]) : 0.0};
 }
 
 Vector7 positive7(const Field& field) {
@@ -128,6 +157,20 @@ std::vector<std::string> names_of(const Map& map, const char* implicit = nullptr
 }
 
 }  // namespace
+
+RigidBodyInertia flange_load(const Field& field) {
+  field.allow_only({"mass", "com", "inertia"});
+  RigidBodyInertia body;
+  body.mass = mass(field["mass"]);
+  if (body.mass < 0.0) field["mass"].fail("a non-negative mass");
+  if (field.has("com")) body.com = center_of_mass(field["com"]);
+  if (field.has("inertia")) {
+    body.inertia = inertia_tensor(field["inertia"]);
+    if (body.mass > 0.0 && body.inertia != Matrix3::Zero() && !is_physical_inertia(body.inertia))
+      field["inertia"].fail("a physical inertia (positive definite, triangle inequality)");
+  }
+  return body;
+}
 
 namespace {
 

@@ -112,4 +112,8 @@ class Field {
   std::string path_;
 };
 
+// A load on the flange as libfranka's setLoad takes it: mass [kg] >= 0, optional CoM [m] in the
+// flange frame and inertia about the CoM (xx, xy, xz, yy, yz, zz) [kg m^2], physical when given.
+RigidBodyInertia flange_load(const Field& field);
+
 }  // namespace csp
