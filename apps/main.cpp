@@ -7,6 +7,21 @@
 #include "cli_options.hpp"
 #include "commands.hpp"
 
+namespace {
+
+// An empty value never means "the default" (`--inertia ''` would silently pick the file's
+// default set): the first option given an empty string, in any parsed (sub)command.
+const CLI::Option* option_with_empty_value(const CLI::App& command) {
+  for (const CLI::Option* option : command.get_options())
+    for (const std::string& value : option->results())
+      if (value.empty()) return option;
+  for (const CLI::App* sub : command.get_subcommands())
+    if (const CLI::Option* option = option_with_empty_value(*sub)) return option;
+  return nullptr;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace csp::cli;
   CLI::App app{"CSP, the Cobot Simulator Platform: Franka Panda / FR3 dynamics and emulation"};
@@ -44,6 +59,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);   // --help on a subcommand, --version
     std::cerr << "csp: " << e.what() << " (see csp --help)\n";
+    return 2;
+  }
+  if (const CLI::Option* empty = option_with_empty_value(app)) {
+    std::cerr << "csp: " << empty->get_name() << ": expected a value, got an empty string (see csp --help)\n";
     return 2;
   }
 

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "csp/bridge/lcm_url.hpp"
 #include "csp/bridge/serve.hpp"
 
 namespace csp::cli {
@@ -29,8 +30,10 @@ int run_serve(const ServeArguments& args) {
   bridge::ServeOptions options;
   options.clock = scenario.clock;
   options.duration = scenario.duration;
-  if (!(args.lockstep_timeout > 0.0)) throw UsageError("--lockstep-timeout: expected a positive number of seconds");
-  options.lcm_url = args.lcm_url;
+  // Bounded: the timeout becomes integer nanoseconds (an infinite one would overflow the conversion).
+  if (!(args.lockstep_timeout > 0.0 && args.lockstep_timeout <= 3600.0))
+    throw UsageError("--lockstep-timeout: expected a positive number of seconds, at most 3600");
+  options.lcm_url = bridge::checked_lcm_url(args.lcm_url);   // before anything is printed
   options.channel_prefix = args.prefix;
   options.log_path = args.log;
   options.lockstep_timeout = args.lockstep_timeout;

@@ -366,6 +366,9 @@ TEST(CliErrors, MissingOrUnknownOptions) {
   expect_usage_error({{"model", "--q", kQ, "--bogus"}, {"--bogus"}});
   expect_usage_error({{"model", "--q", kQ, "--inertia"}, {"--inertia"}});
   expect_usage_error({{}, {"subcommand"}});
+  // An empty value is not "the default".
+  expect_usage_error({{"model", "--q", kQ, "--inertia", ""}, {"--inertia", "empty"}});
+  expect_usage_error({{"log", "export", "", "--out", "x.csv"}, {"log", "empty"}});
 }
 
 // An unknown subcommand is named as such, not reported as a missing one.

@@ -1,5 +1,7 @@
 #include "csp/bridge/client.hpp"
 
+#include "csp/bridge/lcm_url.hpp"
+
 #include <poll.h>
 
 #include <algorithm>
@@ -23,7 +25,7 @@ void copy_to(const Eigen::MatrixBase<Derived>& from, double (&to)[N]) {
 }  // namespace
 
 Client::Client(const std::string& lcm_url, const std::string& channel_prefix, double timeout)
-    : channels_(channel_prefix), lcm_(lcm_url), timeout_(timeout) {
+    : channels_(channel_prefix), lcm_(checked_lcm_url(lcm_url)), timeout_(timeout) {
   if (!lcm_.good()) throw ClientError("cannot open LCM at `" + lcm_url + "`");
   // Function-pointer subscriptions: GCC 12's UBSan misreports LCM's member-function-pointer call.
   lcm_.subscribeFunction<robot_state_t, Client*>(

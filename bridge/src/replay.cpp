@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "csp/bridge/lcm_log.hpp"
+#include "csp/bridge/lcm_url.hpp"
 #include "csp/bridge/server.hpp"
 
 namespace csp::bridge {
@@ -62,7 +63,7 @@ PlaybackReport play_back(const std::string& log_path, const PlaybackOptions& opt
   if (!(options.max_gap > 0.0) || !std::isfinite(options.max_gap))
     throw std::invalid_argument("max gap: expected a positive number of seconds");
   LogReader log(log_path);
-  lcm::LCM lcm(options.lcm_url);
+  lcm::LCM lcm(checked_lcm_url(options.lcm_url));
   if (!lcm.good()) throw std::runtime_error("cannot open LCM at `" + options.lcm_url + "`");
   PlaybackReport report;
   // The schedule advances by each gap between consecutive timestamps (in doubles: a corrupted

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "csp/bridge/lcm_log.hpp"
+#include "csp/bridge/lcm_url.hpp"
 
 namespace csp::bridge {
 namespace {
@@ -26,7 +27,7 @@ int64_t monotonic_ns() {
 class Bus {
  public:
   Bus(const rt::Scenario& scenario, const ServeOptions& options)
-      : options_(options), channels_(options.channel_prefix), lcm_(options.lcm_url) {
+      : options_(options), channels_(options.channel_prefix), lcm_(checked_lcm_url(options.lcm_url)) {
     if (!lcm_.good()) throw std::runtime_error("cannot open LCM at `" + options.lcm_url + "`");
     if (!options.log_path.empty()) log_ = std::make_unique<LogWriter>(options.log_path);
     if (log_) log_->write(channels_.scenario, encode(scenario_message(scenario, options.channel_prefix)), now_utime());
@@ -144,7 +145,8 @@ status_t status_message(const RobotServer& server, const ServeReport& report, co
 
 ServeReport serve(const rt::Scenario& scenario, const ServeOptions& options) {
   if (!(options.duration > 0.0) || !std::isfinite(options.duration)) throw std::invalid_argument("duration: expected a positive number of seconds");
-  if (!(options.lockstep_timeout > 0.0)) throw std::invalid_argument("lockstep timeout: expected a positive number of seconds");
+  if (!(options.lockstep_timeout > 0.0 && options.lockstep_timeout <= 3600.0))
+    throw std::invalid_argument("lockstep timeout: expected a positive number of seconds, at most 3600");
   Bus bus(scenario, options);
   RobotServer& server = bus.server();
   ServeReport report;
