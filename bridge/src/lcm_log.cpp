@@ -165,9 +165,15 @@ rt::Scenario scenario_from_message(const scenario_t& m) {
     out << root;
     write_text(dir / "scenario.yaml", out.c_str());
     scenario = rt::load_scenario((dir / "scenario.yaml").string());
-  } catch (...) {
+  } catch (const std::exception& e) {
+    // Name the recorded files, not the temporary copies that are about to be removed.
+    std::string what = e.what();
+    for (const auto& [copy, original] : {std::pair{(dir / "robot.yaml").string(), "the recorded robot file " + m.robot_path},
+                                         std::pair{(dir / "scenario.yaml").string(), "the recorded scenario " + m.path}})
+      for (std::size_t at = what.find(copy); at != std::string::npos; at = what.find(copy, at + original.size()))
+        what.replace(at, copy.size(), original);
     std::filesystem::remove_all(dir);
-    throw;
+    throw std::runtime_error("the scenario record cannot be rebuilt: " + what);
   }
   std::filesystem::remove_all(dir);
   scenario.path = m.path;

@@ -177,7 +177,14 @@ const char* rejection_name(Rejection rejection) {
 template <typename T>
 Rejection decode_exact(const void* data, int size, T& out) {
   if (size >= 8 && !has_fingerprint<T>(data, size)) return Rejection::kFingerprint;
-  if (size < 8 || out.decode(data, 0, size) < 0) return Rejection::kTruncated;
+  if (size < 8) return Rejection::kTruncated;
+  // lcm-gen's string decoder trusts the encoded length: a length of 0 or below makes it ask
+  // std::string for ~2^64 characters (std::length_error). Such a message is malformed.
+  try {
+    if (out.decode(data, 0, size) < 0) return Rejection::kTruncated;
+  } catch (const std::length_error&) {
+    return Rejection::kTruncated;
+  }
   if (size != out.getEncodedSize()) return Rejection::kOversized;
   return Rejection::kNone;
 }

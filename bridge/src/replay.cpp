@@ -28,7 +28,12 @@ ResimulationReport resimulate(const std::string& log_path) {
           decode_exact(event->data, event->datalen, record) != Rejection::kNone)
         throw std::runtime_error(log_path + ": the first event is not a CSP_SCENARIO record (not a log written by csp serve or csp emulate --lcm-log)" +
                                  (log.damage().empty() ? "" : "; " + log.damage_summary()));
-      const rt::Scenario scenario = scenario_from_message(record);
+      rt::Scenario scenario;
+      try {
+        scenario = scenario_from_message(record);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(log_path + ": event " + std::to_string(event->eventnum) + ": " + e.what());
+      }
       channels = std::make_unique<Channels>(record.channel_prefix);
       server = std::make_unique<RobotServer>(scenario.emulator, *channels, [](const std::string&, const std::vector<uint8_t>&) {},
                                              [](const std::string&) {});

@@ -177,6 +177,9 @@ Scenario load_scenario(const std::string& path) {
   // The robot file is found relative to the scenario file.
   const std::filesystem::path robot = top["robot"].text();
   s.robot_file = (robot.is_absolute() ? robot : std::filesystem::path(path).parent_path() / robot).string();
+  // A robot file that is not there is this file's error; errors inside it name the robot file.
+  if (!std::filesystem::is_regular_file(s.robot_file))
+    top["robot"].fail("the path of a robot file, relative to this scenario (`" + s.robot_file + "` is not a readable file)");
   const RobotConfig config = load_robot_config(s.robot_file);
   const std::string end_effector = top.has("end_effector") ? top["end_effector"].text() : "none";
   const std::string joint_limits = top.has("joint_limits") ? top["joint_limits"].text() : "";
