@@ -59,7 +59,7 @@ struct JointLog {
   std::vector<ExtensionColumn> extensions;    // x_... columns, in file order
 
   std::size_t size() const { return t.size(); }
-  // Empties every group and extension, keeping the groups present and the memory.
+  // Empties every group and extension column (the columns stay, and their memory).
   void clear_rows();
 };
 
