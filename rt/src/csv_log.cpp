@@ -1,6 +1,9 @@
 #include "csp/rt/csv_log.hpp"
 
 #include <cmath>
+#include <tuple>
+#include <type_traits>
+#include <utility>
 
 namespace csp::rt {
 namespace {
@@ -41,11 +44,26 @@ RobotMode robot_mode_from_name(const std::string& name, const std::string& where
   throw JointLogError(where + "robot_mode: unknown mode `" + name + "` (libfranka's franka::RobotMode)");
 }
 
-// A group's row into a state field, when the log has the group.
-template <class Vector, std::size_t N>
-void copy_row(const std::vector<Vector>& series, std::size_t row, std::array<double, N>& field) {
-  static_assert(Vector::RowsAtCompileTime == N);
-  if (!series.empty()) Eigen::Map<Vector>(field.data()) = series[row];
+// The groups that are a RobotState array as it is: one list for both directions of the mapping.
+template <class Visit>
+void for_each_array_group(Visit&& each) {
+  const auto visit = [&](auto field, auto group) {
+    using Array = std::decay_t<decltype(std::declval<RobotState>().*field)>;
+    using Vector = typename std::decay_t<decltype(std::declval<JointLog>().*group)>::value_type;
+    static_assert(std::tuple_size_v<Array> == Vector::RowsAtCompileTime, "a group's width differs from its field's");
+    each(field, group);
+  };
+  visit(&RobotState::q, &JointLog::q);
+  visit(&RobotState::dq, &JointLog::dq);
+  visit(&RobotState::tau_J, &JointLog::tau_J);
+  visit(&RobotState::tau_J_d, &JointLog::tau_J_d);
+  visit(&RobotState::q_d, &JointLog::q_d);
+  visit(&RobotState::dq_d, &JointLog::dq_d);
+  visit(&RobotState::ddq_d, &JointLog::ddq_d);
+  visit(&RobotState::dtau_J, &JointLog::dtau_J);
+  visit(&RobotState::tau_ext_hat_filtered, &JointLog::tau_ext_hat_filtered);
+  visit(&RobotState::O_F_ext_hat_K, &JointLog::O_F_ext_hat_K);
+  visit(&RobotState::O_T_EE, &JointLog::O_T_EE);
 }
 
 // The state the emulator's log starts from, only to know which groups a state fills.
@@ -59,17 +77,7 @@ JointLog state_layout() {
 
 void append_state(JointLog& log, const RobotState& s, bool command_received) {
   log.t.push_back(s.time.toSec());
-  log.q.emplace_back(s.q.data());
-  log.dq.emplace_back(s.dq.data());
-  log.tau_J.emplace_back(s.tau_J.data());
-  log.tau_J_d.emplace_back(s.tau_J_d.data());
-  log.q_d.emplace_back(s.q_d.data());
-  log.dq_d.emplace_back(s.dq_d.data());
-  log.ddq_d.emplace_back(s.ddq_d.data());
-  log.dtau_J.emplace_back(s.dtau_J.data());
-  log.tau_ext_hat_filtered.emplace_back(s.tau_ext_hat_filtered.data());
-  log.O_F_ext_hat_K.emplace_back(s.O_F_ext_hat_K.data());
-  log.O_T_EE.emplace_back(s.O_T_EE.data());
+  for_each_array_group([&](auto field, auto group) { (log.*group).emplace_back((s.*field).data()); });
   log.robot_mode.emplace_back(robot_mode_name(s.robot_mode));
   log.command_received.push_back(command_received ? 1.0 : 0.0);
   log.control_command_success_rate.push_back(s.control_command_success_rate);
@@ -81,17 +89,11 @@ RobotState state_from_row(const JointLog& log, std::size_t row) {
   if (log.t[row] < 0.0) throw JointLogError(where + "expected t >= 0 for a robot state");
   RobotState s;
   s.time = Duration(static_cast<uint64_t>(std::llround(log.t[row] * 1e3)));   // libfranka's 1 ms resolution
-  copy_row(log.q, row, s.q);
-  copy_row(log.dq, row, s.dq);
-  copy_row(log.tau_J, row, s.tau_J);
-  copy_row(log.tau_J_d, row, s.tau_J_d);
-  copy_row(log.q_d, row, s.q_d);
-  copy_row(log.dq_d, row, s.dq_d);
-  copy_row(log.ddq_d, row, s.ddq_d);
-  copy_row(log.dtau_J, row, s.dtau_J);
-  copy_row(log.tau_ext_hat_filtered, row, s.tau_ext_hat_filtered);
-  copy_row(log.O_F_ext_hat_K, row, s.O_F_ext_hat_K);
-  copy_row(log.O_T_EE, row, s.O_T_EE);
+  for_each_array_group([&](auto field, auto group) {
+    const auto& series = log.*group;
+    using Vector = typename std::decay_t<decltype(series)>::value_type;
+    if (!series.empty()) Eigen::Map<Vector>((s.*field).data()) = series[row];   // the groups the log has
+  });
   s.robot_mode = log.robot_mode.empty() ? RobotMode::kMove : robot_mode_from_name(log.robot_mode[row], where);
   if (!log.control_command_success_rate.empty()) s.control_command_success_rate = log.control_command_success_rate[row];
   if (!log.current_errors.empty()) s.current_errors = errors_from_text(log.current_errors[row], where);
