@@ -214,6 +214,20 @@ TEST(Seams, EmulateLogIsReadByGap) {
   std::filesystem::remove(csv);
 }
 
+// The emulator's CSV -> csp log import -> csp log export: every group the emulator writes maps into
+// robot_state_t and back, so the same bytes come out.
+TEST(Seams, EmulatedCsvSurvivesImportAndExportByteForByte) {
+  const std::string csv = test::temp_path("emulated.csv"), lcm_log = test::temp_path("emulated.lcmlog"),
+                    exported = test::temp_path("emulated_exported.csv"), out = test::temp_path("import_export.out");
+  ASSERT_EQ(run_csp({"emulate", "--duration", "1", "--log", csv}, out), 0) << read_text(out);
+  ASSERT_EQ(run_csp({"log", "import", csv, "--out", lcm_log}, out), 0) << read_text(out);
+  ASSERT_EQ(run_csp({"log", "export", lcm_log, "--out", exported}, out), 0) << read_text(out);
+  const std::string original = read_text(csv);
+  EXPECT_EQ(std::count(original.begin(), original.end(), '\n'), 1002) << "header, start state, 1000 cycles";
+  EXPECT_EQ(read_text(exported), original);
+  for (const std::string& f : {csv, lcm_log, exported}) std::filesystem::remove(f);
+}
+
 // (b) csp serve (lockstep) + the external controller process -> LCM log -> csp gap, directly and
 // through csp log export: the same rows, so the same verdict and the same figures.
 TEST(Seams, ServedLcmLogGivesTheSameDiagnosisDirectlyAndViaExport) {
