@@ -7,6 +7,7 @@
 
 #include "cli_options.hpp"
 #include "commands.hpp"
+#include "csp/bridge/csv_convert.hpp"
 #include "csp/gap/report.hpp"
 
 namespace csp::cli {
@@ -15,10 +16,16 @@ namespace {
 struct GapArguments {
   ModelArguments model;
   std::string log, heldout, json, report;
+  std::string channel = "CSP_STATE";
   double train_fraction = 0.5;
   double sample_period = gap::FilterOptions{}.sample_period;
   unsigned seed = 1;
 };
+
+// A CSV joint log, or the robot states of an LCM log: told apart by content, not by name.
+JointLog read_log(const std::string& path, const std::string& channel) {
+  return bridge::is_lcm_log(path) ? bridge::read_joint_log_lcm(path, channel) : read_joint_log_csv(path);
+}
 
 int run_gap(const GapArguments& args, const std::string& command_line) {
   if (!(args.train_fraction > 0.0 && args.train_fraction < 1.0))
@@ -30,11 +37,11 @@ int run_gap(const GapArguments& args, const std::string& command_line) {
   options.train_fraction = args.train_fraction;
   options.filter.sample_period = args.sample_period;
   options.seed = args.seed;
-  const gap::JointLog log = gap::read_log_csv(args.log);
+  const JointLog log = read_log(args.log, args.channel);
   const auto start = std::chrono::steady_clock::now();
   const gap::Diagnosis diagnosis = args.heldout.empty()
                                        ? gap::diagnose(model, log, options)
-                                       : gap::diagnose(model, log, gap::read_log_csv(args.heldout), options);
+                                       : gap::diagnose(model, log, read_log(args.heldout, args.channel), options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::cout << "csp gap: " << args.log
@@ -64,9 +71,13 @@ Command add_gap_command(CLI::App& app) {
       "gap",
       "Diagnose the sim-to-real gap of a joint log: where the model misses, which unmodelled effect causes it, "
       "how far the held-out gap shrinks once it is added");
-  command->add_option("--log", args->log, "Joint log CSV: t, q1..q7, dq1..dq7, tau_J1..tau_J7")->required();
+  command
+      ->add_option("--log", args->log,
+                   "Joint log: CSV (t, q1..q7, dq1..dq7, tau_J1..tau_J7, ...; docs/joint-log.md) or an LCM log")
+      ->required();
   command->add_option("--log-heldout", args->heldout,
                       "A second log (another trajectory) to judge the fits on; without it the log is split in time");
+  command->add_option("--channel", args->channel, "Channel of the robot states in an LCM log")->capture_default_str();
   args->model.add_to(*command);
   command
       ->add_option("--train-fraction", args->train_fraction,

@@ -1,4 +1,4 @@
-// csp log export / import: LCM logs <-> the CSV layout of the real Panda data.
+// csp log export / import: LCM logs <-> CSV joint logs (docs/joint-log.md).
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -19,11 +19,11 @@ struct LogArguments {
 
 Command add_log_command(CLI::App& app) {
   auto args = std::make_shared<LogArguments>();
-  CLI::App* cmd = app.add_subcommand("log", "Convert LCM logs to and from the real robot's CSV layout");
+  CLI::App* cmd = app.add_subcommand("log", "Convert LCM logs to and from CSV joint logs (docs/joint-log.md)");
   cmd->require_subcommand(1);
   CLI::App* to_csv = cmd->add_subcommand("export", "Write the robot states of an LCM log as CSV");
   to_csv->add_option("log", args->input, "LCM log file")->required();
-  CLI::App* from_csv = cmd->add_subcommand("import", "Turn a real-robot CSV (t, q, dq, tau_J[, tau_J_d]) into an LCM log");
+  CLI::App* from_csv = cmd->add_subcommand("import", "Turn a CSV joint log (t, q, dq, tau_J and any optional groups) into an LCM log");
   from_csv->add_option("csv", args->input, "CSV file")->required();
   for (CLI::App* sub : {to_csv, from_csv}) {
     sub->add_option("--out", args->out, "Output file")->required();
@@ -40,7 +40,9 @@ Command add_log_command(CLI::App& app) {
                   static_cast<unsigned long long>(r.rows), args->out.c_str(), static_cast<unsigned long long>(r.repeated),
                   static_cast<unsigned long long>(r.rejected));
       if (r.rows == 0) throw std::runtime_error(args->input + ": no robot_state_t on channel " + args->channel);
-      return 0;
+      if (r.damage.empty()) return 0;
+      std::fprintf(stderr, "csp log export: %s: only the readable part was exported\n", r.damage.c_str());
+      return 1;
     }
     const uint64_t rows = bridge::import_csv(args->input, args->out, args->channel);
     std::printf("csp log import: %llu states to %s\n", static_cast<unsigned long long>(rows), args->out.c_str());

@@ -19,7 +19,7 @@ void BM_GapDiagnosis20s(benchmark::State& state) {
   log_options.duration = 20.0;
   const gap::InjectedEffects truth =
       gap::merged(gap::realistic_effect("joint_friction", model, 1), gap::realistic_effect("sensor_offset", model, 1));
-  const gap::JointLog log = gap::generate_log(model, truth, 1, 2, log_options);
+  const JointLog log = gap::generate_log(model, truth, 1, 2, log_options);
   for (auto _ : state) {
     const gap::Diagnosis diagnosis = gap::diagnose(model, log);
     benchmark::DoNotOptimize(diagnosis.unexplained_fraction);

@@ -96,4 +96,19 @@ inline std::vector<robot_state_t> states_in_log(const std::string& path, const s
   return states;
 }
 
+// Publishes `marker` on TEST_MARKER every 50 ms until the log being written at `path` holds it;
+// false after 20 s.
+inline bool wait_until_logged(lcm::LCM& lcm, const std::string& path, const std::string& marker) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < deadline) {
+    lcm.publish("TEST_MARKER", marker.data(), static_cast<unsigned>(marker.size()));
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (!std::filesystem::exists(path)) continue;
+    bridge::LogReader log(path);   // a partly written last event reads as the end of the log
+    for (const bridge::LogEvent* e = log.next(); e; e = log.next())
+      if (e->channel == "TEST_MARKER" && std::string(static_cast<const char*>(e->data), e->datalen) == marker) return true;
+  }
+  return false;
+}
+
 }  // namespace csp::test

@@ -348,7 +348,7 @@ TEST(BridgeLog, ImportNamesTheBadCell) {
     import_csv(bad, log, "CSP_STATE");
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
-    EXPECT_EQ(std::string(e.what()), bad + ": line 3, column `q5`: expected a finite number, got `x`");
+    EXPECT_EQ(std::string(e.what()), bad + ":3: column 6 (q5): expected a finite number, got `x`");
   }
   for (const std::string& f : {log, bad}) std::filesystem::remove(f);
 }

@@ -103,21 +103,6 @@ TEST(BridgeNet, RealtimeSilentControllerTriggersCommunicationConstraintsViolatio
   std::filesystem::remove(log);
 }
 
-// Publishes `marker` on TEST_MARKER every 50 ms until the log being written at `path` holds it;
-// false after 20 s.
-bool wait_until_logged(lcm::LCM& lcm, const std::string& path, const std::string& marker) {
-  const auto deadline = std::chrono::steady_clock::now() + 20s;
-  while (std::chrono::steady_clock::now() < deadline) {
-    lcm.publish("TEST_MARKER", marker.data(), static_cast<unsigned>(marker.size()));
-    std::this_thread::sleep_for(50ms);
-    if (!std::filesystem::exists(path)) continue;
-    LogReader log(path);   // a partly written last event reads as the end of the log
-    for (const LogEvent* e = log.next(); e; e = log.next())
-      if (e->channel == "TEST_MARKER" && std::string(static_cast<const char*>(e->data), e->datalen) == marker) return true;
-  }
-  return false;
-}
-
 // lcm-logger records a csp serve session: csp log export reads it, and its rows are those of
 // CSP's own log of the same session.
 TEST(BridgeNet, LcmLoggerRecordingIsReadByCspLogExport) {
@@ -129,11 +114,11 @@ TEST(BridgeNet, LcmLoggerRecordingIsReadByCspLogExport) {
   ASSERT_TRUE(probe.good());
   // Markers on a channel of their own: the logger records the session only once it has
   // recorded "ready", and has received all of it once it has recorded "end".
-  ASSERT_TRUE(wait_until_logged(probe, theirs, "ready")) << logger.output();
+  ASSERT_TRUE(test::wait_until_logged(probe, theirs, "ready")) << logger.output();
   test::Process server({CSP_EXECUTABLE, "serve", kScenario, "--clock", "realtime", "--duration", "0.3", "--lcm-url", url, "--log", ours},
                        test::temp_path("serve-logger.out"));
   ASSERT_EQ(server.wait(30s), 0) << server.output();
-  ASSERT_TRUE(wait_until_logged(probe, theirs, "end")) << logger.output();
+  ASSERT_TRUE(test::wait_until_logged(probe, theirs, "end")) << logger.output();
   logger.signal(SIGINT);
   ASSERT_EQ(logger.wait(10s), 0) << logger.output();
 

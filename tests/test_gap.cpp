@@ -49,8 +49,8 @@ std::string row(double t, const std::string& value = "0.1") {
 
 std::string read_error(const std::string& path) {
   try {
-    read_log_csv(path);
-  } catch (const LogError& e) {
+    read_joint_log_csv(path);
+  } catch (const JointLogError& e) {
     return e.what();
   }
   return "no error";
@@ -60,13 +60,13 @@ TEST(GapLog, RoundTripOfAGeneratedLog) {
   const Model model = diagnosing_model();
   const JointLog log = plain_log(model, 0.2, 1);
   const std::string path = (temp_dir() / "round_trip.csv").string();
-  write_log_csv(path, log);
-  const JointLog back = read_log_csv(path);
+  write_joint_log_csv(path, log);
+  const JointLog back = read_joint_log_csv(path);
   ASSERT_EQ(back.size(), log.size());
   for (std::size_t k = 0; k < log.size(); ++k) {
     EXPECT_NEAR(back.t[k], log.t[k], 1e-9);
     EXPECT_TRUE(near(back.q[k], log.q[k], 1e-9));
-    EXPECT_TRUE(near(back.tau[k], log.tau[k], 1e-8));
+    EXPECT_TRUE(near(back.tau_J[k], log.tau_J[k], 1e-8));
   }
 }
 
@@ -98,9 +98,9 @@ TEST(GapLog, BadInputNamesFileLineAndColumn) {
 TEST(GapLog, TooShortForTheFilter) {
   const std::string path = write_file("short.csv", header() + row(0.0) + row(0.001) + row(0.002));
   try {
-    filter_log(read_log_csv(path), FilterOptions{});
-    FAIL() << "expected LogError";
-  } catch (const LogError& e) {
+    filter_log(read_joint_log_csv(path), FilterOptions{});
+    FAIL() << "expected JointLogError";
+  } catch (const JointLogError& e) {
     EXPECT_NE(std::string(e.what()).find("too short for the smoothing filter"), std::string::npos) << e.what();
   }
 }
@@ -318,7 +318,7 @@ TEST(GapCommand, RunsOnAGeneratedLogAndRejectsBadInput) {
   LogOptions options;
   options.duration = 8.0;
   const std::string log = (temp_dir() / "gap_cli.csv").string();
-  write_log_csv(log, generate_log(model, realistic_effect("base_tilt", model, 2), 5, 6, options));
+  write_joint_log_csv(log, generate_log(model, realistic_effect("base_tilt", model, 2), 5, 6, options));
   const std::string json = (temp_dir() / "gap_cli.json").string(), report = (temp_dir() / "gap_report").string();
   const std::string command = std::string(CSP_EXECUTABLE) + " gap --log " + log + " --friction none --json " + json +
                               " --report " + report + " > " + (temp_dir() / "gap_cli.out").string();

@@ -83,7 +83,7 @@ double contribution(const Model& model, const InjectedEffects& effect, unsigned 
   const JointLog with = generate_log(model, effect, 100 * seed + 3, 100 * seed + 4, quiet);
   const JointLog without = generate_log(model, {}, 100 * seed + 3, 100 * seed + 4, quiet);
   double sum = 0.0;
-  for (std::size_t k = 0; k < with.size(); ++k) sum += (with.tau[k] - without.tau[k]).squaredNorm();
+  for (std::size_t k = 0; k < with.size(); ++k) sum += (with.tau_J[k] - without.tau_J[k]).squaredNorm();
   return sum / static_cast<double>(with.size());
 }
 

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "bridge_support.hpp"
+#include "csp/bridge/csv_convert.hpp"
 #include "csp/bridge/replay.hpp"
 #include "csp/rt/controllers.hpp"
 
@@ -95,6 +96,21 @@ TEST(LogDamage, ADamagedHeaderInTheMiddleIsSkippedToTheNextEvent) {
   EXPECT_NE(log.damage_summary().find("at byte " + std::to_string(offsets[k])), std::string::npos) << log.damage_summary();
   EXPECT_FALSE(resimulate(path).identical());
   std::filesystem::remove(path);
+}
+
+TEST(LogDamage, ExportReportsItAndGapRefusesIt) {
+  const std::string path = emulate_log("export.lcmlog", 0.2), csv = test::temp_path("export.csv");
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) * 2 / 3);
+  const ExportReport r = export_csv(path, csv, "CSP_STATE");
+  EXPECT_GT(r.rows, 10u);
+  EXPECT_NE(r.damage.find("damaged log"), std::string::npos) << r.damage;
+  try {
+    read_joint_log_lcm(path, "CSP_STATE");
+    FAIL() << "expected an error";
+  } catch (const JointLogError& e) {
+    EXPECT_NE(std::string(e.what()).find("damaged log"), std::string::npos) << e.what();
+  }
+  for (const std::string& f : {path, csv}) std::filesystem::remove(f);
 }
 
 TEST(LogDamage, PlaybackDoesNotWaitForACorruptedTimestamp) {

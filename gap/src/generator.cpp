@@ -137,7 +137,7 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
     rnea(true_model, data, q, dq, ddq, tau);
     tau += friction_torque(p.friction, dq) + friction_torque(truth.friction, dq) + truth.armature.cwiseProduct(ddq) +
            truth.sensor_offset;
-    log.tau.push_back(tau + noise(options.torque_noise));
+    log.tau_J.push_back(tau + noise(options.torque_noise));
   }
   return log;
 }

@@ -47,7 +47,7 @@ Samples filter_log(const JointLog& log, const FilterOptions& options) {
   // Grid spacing: the median time step (robust to the jitter and gaps of real logs).
   std::vector<double> steps(log.size() > 1 ? log.size() - 1 : 0);
   for (std::size_t k = 0; k + 1 < log.size(); ++k) steps[k] = log.t[k + 1] - log.t[k];
-  if (steps.empty()) throw LogError(log.source + ": expected at least 2 rows");
+  if (steps.empty()) throw JointLogError(log.source + ": expected at least 2 rows");
   std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
   const double dt = steps[steps.size() / 2];
   const std::size_t n = static_cast<std::size_t>(std::floor((log.t.back() - log.t.front()) / dt)) + 1;
@@ -56,12 +56,12 @@ Samples filter_log(const JointLog& log, const FilterOptions& options) {
       std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(options.sample_period / dt)));
   const std::size_t needed = 2 * static_cast<std::size_t>(half_width) + 1 + 10 * stride;
   if (n < needed)
-    throw LogError(log.source + ": too short for the smoothing filter: " + std::to_string(n) +
-                   " samples on the uniform grid, need at least " + std::to_string(needed) + " (" +
-                   std::to_string(options.window) + " s window plus 10 samples)");
+    throw JointLogError(log.source + ": too short for the smoothing filter: " + std::to_string(n) +
+                        " samples on the uniform grid, need at least " + std::to_string(needed) + " (" +
+                        std::to_string(options.window) + " s window plus 10 samples)");
 
   const std::vector<Vector7> q = resample(log.t, log.q, dt, n), dq = resample(log.t, log.dq, dt, n),
-                             tau = resample(log.t, log.tau, dt, n);
+                             tau = resample(log.t, log.tau_J, dt, n);
   const std::vector<Vector7> ddq = log.ddq.empty() ? std::vector<Vector7>{} : resample(log.t, log.ddq, dt, n);
   const SavitzkyGolay filter(half_width, options.order, dt);
 

@@ -1,74 +1,113 @@
 #include "csp/rt/csv_log.hpp"
 
-#include <algorithm>
-#include <charconv>
-#include <stdexcept>
+#include <cmath>
+#include <tuple>
+#include <type_traits>
+#include <utility>
 
 namespace csp::rt {
 namespace {
 
-void append(std::string& line, double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  line += ',';
-  line.append(buffer, result.ptr);
+// Error names joined by '|' (not ", " as libfranka prints them) keep the column one word.
+std::string errors_text(const Errors& errors) {
+  std::string text = "[";
+  for (int i = 0; i < kNumErrors; ++i) {
+    if (!errors.errors()[i]) continue;
+    if (text.size() > 1) text += '|';
+    text += error_name(static_cast<Error>(i));
+  }
+  return text + "]";
 }
 
-template <std::size_t N>
-void append(std::string& line, const std::array<double, N>& values) {
-  for (double v : values) append(line, v);
+Errors errors_from_text(const std::string& text, const std::string& where) {
+  if (text.size() < 2 || text.front() != '[' || text.back() != ']')
+    throw JointLogError(where + "current_errors: expected [name1|name2] or [], got `" + text + "`");
+  Errors errors;
+  const std::string names = text.substr(1, text.size() - 2);
+  for (std::size_t begin = 0; begin < names.size();) {
+    const std::size_t end = std::min(names.find('|', begin), names.size());
+    const std::string name = names.substr(begin, end - begin);
+    int found = -1;
+    for (int i = 0; i < kNumErrors; ++i)
+      if (name == error_name(static_cast<Error>(i))) found = i;
+    if (found < 0) throw JointLogError(where + "current_errors: unknown error name `" + name + "` (libfranka's franka::Errors)");
+    errors.set(static_cast<Error>(found));
+    begin = end + 1;
+  }
+  return errors;
 }
 
-void header(std::string& line, const char* name, int count) {
-  for (int i = 1; i <= count; ++i) line += ',' + std::string(name) + std::to_string(i);
+RobotMode robot_mode_from_name(const std::string& name, const std::string& where) {
+  for (const RobotMode mode : {RobotMode::kOther, RobotMode::kIdle, RobotMode::kMove, RobotMode::kGuiding, RobotMode::kReflex,
+                               RobotMode::kUserStopped, RobotMode::kAutomaticErrorRecovery})
+    if (name == robot_mode_name(mode)) return mode;
+  throw JointLogError(where + "robot_mode: unknown mode `" + name + "` (libfranka's franka::RobotMode)");
+}
+
+// The groups that are a RobotState array as it is: one list for both directions of the mapping.
+template <class Visit>
+void for_each_array_group(Visit&& each) {
+  const auto visit = [&](auto field, auto group) {
+    using Array = std::decay_t<decltype(std::declval<RobotState>().*field)>;
+    using Vector = typename std::decay_t<decltype(std::declval<JointLog>().*group)>::value_type;
+    static_assert(std::tuple_size_v<Array> == Vector::RowsAtCompileTime, "a group's width differs from its field's");
+    each(field, group);
+  };
+  visit(&RobotState::q, &JointLog::q);
+  visit(&RobotState::dq, &JointLog::dq);
+  visit(&RobotState::tau_J, &JointLog::tau_J);
+  visit(&RobotState::tau_J_d, &JointLog::tau_J_d);
+  visit(&RobotState::q_d, &JointLog::q_d);
+  visit(&RobotState::dq_d, &JointLog::dq_d);
+  visit(&RobotState::ddq_d, &JointLog::ddq_d);
+  visit(&RobotState::dtau_J, &JointLog::dtau_J);
+  visit(&RobotState::tau_ext_hat_filtered, &JointLog::tau_ext_hat_filtered);
+  visit(&RobotState::O_F_ext_hat_K, &JointLog::O_F_ext_hat_K);
+  visit(&RobotState::O_T_EE, &JointLog::O_T_EE);
+}
+
+// The state the emulator's log starts from, only to know which groups a state fills.
+JointLog state_layout() {
+  JointLog layout;
+  append_state(layout, RobotState{}, false);
+  return layout;
 }
 
 }  // namespace
 
-CsvLog::CsvLog(const std::string& path) : path_(path), out_(path, std::ios::out | std::ios::trunc) {
-  if (!out_) throw std::runtime_error(path + ": cannot write the log file");
-  std::string h = "t";
-  header(h, "q", 7);
-  header(h, "dq", 7);
-  header(h, "tau_J", 7);
-  header(h, "tau_J_d", 7);
-  header(h, "q_d", 7);
-  header(h, "dq_d", 7);
-  header(h, "tau_ext_hat_filtered", 7);
-  header(h, "O_F_ext_hat_K", 6);
-  header(h, "O_T_EE_", 16);
-  h += ",robot_mode,command_received,control_command_success_rate,current_errors\n";
-  out_ << h;
+void append_state(JointLog& log, const RobotState& s, bool command_received) {
+  log.t.push_back(s.time.toSec());
+  for_each_array_group([&](auto field, auto group) { (log.*group).emplace_back((s.*field).data()); });
+  log.robot_mode.emplace_back(robot_mode_name(s.robot_mode));
+  log.command_received.push_back(command_received ? 1.0 : 0.0);
+  log.control_command_success_rate.push_back(s.control_command_success_rate);
+  log.current_errors.push_back(errors_text(s.current_errors));
 }
 
-CsvLog::~CsvLog() { out_.flush(); }
+RobotState state_from_row(const JointLog& log, std::size_t row) {
+  const std::string where = log.source + ": row " + std::to_string(row + 1) + ": ";
+  if (log.t[row] < 0.0) throw JointLogError(where + "expected t >= 0 for a robot state");
+  RobotState s;
+  s.time = Duration(static_cast<uint64_t>(std::llround(log.t[row] * 1e3)));   // libfranka's 1 ms resolution
+  for_each_array_group([&](auto field, auto group) {
+    const auto& series = log.*group;
+    using Vector = typename std::decay_t<decltype(series)>::value_type;
+    if (!series.empty()) Eigen::Map<Vector>((s.*field).data()) = series[row];   // the groups the log has
+  });
+  s.robot_mode = log.robot_mode.empty() ? RobotMode::kMove : robot_mode_from_name(log.robot_mode[row], where);
+  if (!log.control_command_success_rate.empty()) s.control_command_success_rate = log.control_command_success_rate[row];
+  if (!log.current_errors.empty()) s.current_errors = errors_from_text(log.current_errors[row], where);
+  return s;
+}
 
-void CsvLog::write(const RobotState& s, const CycleInfo& cycle) {
-  line_.clear();
-  char buffer[32];
-  const auto t = std::to_chars(buffer, buffer + sizeof(buffer), s.time.toSec());
-  line_.append(buffer, t.ptr);
-  append(line_, s.q);
-  append(line_, s.dq);
-  append(line_, s.tau_J);
-  append(line_, s.tau_J_d);
-  append(line_, s.q_d);
-  append(line_, s.dq_d);
-  append(line_, s.tau_ext_hat_filtered);
-  append(line_, s.O_F_ext_hat_K);
-  append(line_, s.O_T_EE);
-  line_ += ',';
-  line_ += robot_mode_name(s.robot_mode);
-  line_ += cycle.command_received ? ",1" : ",0";
-  append(line_, s.control_command_success_rate);
-  // Error names joined by '|' keep the column free of commas.
-  std::string errors(s.current_errors);
-  for (char& ch : errors)
-    if (ch == ',') ch = '|';
-  errors.erase(std::remove(errors.begin(), errors.end(), ' '), errors.end());
-  line_ += ',' + errors + '\n';
-  out_ << line_;
-  if (!out_) throw std::runtime_error(path_ + ": writing the log failed (disk full?)");
+CsvLog::CsvLog(const std::string& path) : row_(state_layout()), writer_(path, row_) { row_.clear_rows(); }
+
+CsvLog::~CsvLog() { writer_.flush(); }
+
+void CsvLog::write(const RobotState& state, const CycleInfo& cycle) {
+  row_.clear_rows();
+  append_state(row_, state, cycle.command_received);
+  writer_.write_row(row_, 0);
   ++rows_;
 }
 

@@ -1,9 +1,15 @@
-// `csp log export` and `csp log import`: LCM logs <-> the CSV layout of the real Panda data
-// (t, q1..q7, dq1..dq7, tau_J1..tau_J7, then rt::CsvLog's other columns), so real and emulated
-// data share one format.
+// LCM logs as joint logs (docs/joint-log.md): an LCM log is a second container of the joint-log
+// rows. `csp log export` writes its robot states as a CSV joint log (rt::CsvLog), `csp log import`
+// turns a CSV joint log into an LCM log, and `csp gap --log session.lcmlog` reads the states
+// directly. All three see the same states: for_each_logged_state.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <string>
+
+#include "csp/io/joint_log.hpp"
+#include "csp/rt/robot_state.hpp"
 
 namespace csp::bridge {
 
@@ -11,14 +17,31 @@ struct ExportReport {
   uint64_t rows = 0;
   uint64_t repeated = 0;    // states published again while the robot waited (same message_id): skipped
   uint64_t rejected = 0;    // events on the state channel that are not a robot_state_t
+  std::string damage;       // LogReader::damage_summary(): empty for an intact log
 };
-// Writes every state on `state_channel` (default CSP_STATE) as one CSV row.
+
+// Calls `visit(state, command_received)` for every robot state on `state_channel` of an LCM log,
+// in order, once each: a state published again unchanged (same message_id; utime aside) is
+// skipped, an event that does not decode as robot_state_t counted as rejected.
+ExportReport for_each_logged_state(const std::string& log_path, const std::string& state_channel,
+                                   const std::function<void(const rt::RobotState&, bool command_received)>& visit);
+
+// True if `path` is a regular file that starts with an LCM log event's magic number (0xEDA1DA01),
+// whatever its name.
+bool is_lcm_log(const std::string& path);
+
+// Writes every state on `state_channel` (default CSP_STATE) as one CSV row (rt::CsvLog).
 ExportReport export_csv(const std::string& log_path, const std::string& csv_path, const std::string& state_channel);
 
-// Reads a real-robot CSV (columns t, q1..q7, dq1..dq7, tau_J1..tau_J7, optionally tau_J_d1..7;
-// others ignored) and writes one robot_state_t per row on `state_channel`: time is t in whole
-// milliseconds (libfranka's resolution), utime t in microseconds, message_id the row number. Returns the
-// rows; throws std::runtime_error naming the file, line and column of bad input.
+// The states on `state_channel` as a joint log, checked as a CSV joint log is (check_joint_log);
+// throws JointLogError naming the file when the channel holds fewer than 2 states or the log is
+// damaged (a diagnosis must not run on a log with holes it does not know of).
+JointLog read_joint_log_lcm(const std::string& log_path, const std::string& state_channel);
+
+// Reads a CSV joint log (read_joint_log_csv) and writes one robot_state_t per row on
+// `state_channel`, with the optional groups the log has (rt::state_from_row): time is t in whole
+// milliseconds (libfranka's resolution), utime t in microseconds, message_id the row number.
+// Returns the rows; throws JointLogError naming the file, line and column of bad input.
 uint64_t import_csv(const std::string& csv_path, const std::string& log_path, const std::string& state_channel);
 
 }  // namespace csp::bridge

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "csp/gap/effects.hpp"
-#include "csp/gap/log.hpp"
+#include "csp/io/joint_log.hpp"
 
 namespace csp::gap {
 

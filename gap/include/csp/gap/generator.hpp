@@ -8,7 +8,7 @@
 #include <string>
 
 #include "csp/dynamics/model.hpp"
-#include "csp/gap/log.hpp"
+#include "csp/io/joint_log.hpp"
 
 namespace csp::gap {
 

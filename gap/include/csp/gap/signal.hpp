@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "csp/gap/log.hpp"
+#include "csp/io/joint_log.hpp"
 
 namespace csp::gap {
 
@@ -40,7 +40,7 @@ struct Samples {
   std::size_t size() const { return t.size(); }
 };
 
-// Throws LogError when the log is too short for the filter window.
+// Throws JointLogError when the log is too short for the filter window.
 Samples filter_log(const JointLog& log, const FilterOptions& options);
 
 }  // namespace csp::gap

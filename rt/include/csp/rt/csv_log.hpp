@@ -1,31 +1,37 @@
-// The per-cycle CSV log of `csp emulate`: the column layout of the real Panda log
-// (t, q1..q7, dq1..q7, tau_J1..tau_J7) followed by the other fields, so real and emulated data
-// share one format. Numbers are written in their shortest exact form: the same run gives the
-// same bytes. Rows are flushed when the log closes, also when a controller failure unwinds.
+// The per-cycle CSV log of `csp emulate`, in the joint-log format (csp/io/joint_log.hpp,
+// docs/joint-log.md): t, q, dq, tau_J first as in the real Panda log, then the other groups the
+// robot state reports. The same run gives the same bytes. Rows are flushed when the log closes,
+// also when a controller failure unwinds.
 #pragma once
 
-#include <fstream>
 #include <string>
 
+#include "csp/io/joint_log.hpp"
 #include "csp/rt/control_loop.hpp"
 
 namespace csp::rt {
 
+// The robot state as one joint-log row, and back: the one mapping between RobotState and the
+// joint-log groups (the CSV log, LCM export and import, csp gap on LCM logs use it).
+void append_state(JointLog& log, const RobotState& state, bool command_received);
+// Row `row` of `log` as a robot state: the groups the log has, the rest default. Without
+// robot_mode the robot is in Move. Throws JointLogError for an unknown mode or error name.
+RobotState state_from_row(const JointLog& log, std::size_t row);
+
 class CsvLog {
  public:
-  explicit CsvLog(const std::string& path);   // throws std::runtime_error if it cannot be written
+  explicit CsvLog(const std::string& path);   // throws JointLogError if it cannot be written
   ~CsvLog();
   CsvLog(const CsvLog&) = delete;
   CsvLog& operator=(const CsvLog&) = delete;
 
   void write(const RobotState& state, const CycleInfo& cycle);
   uint64_t rows() const { return rows_; }
-  const std::string& path() const { return path_; }
+  const std::string& path() const { return writer_.path(); }
 
  private:
-  std::string path_;
-  std::ofstream out_;
-  std::string line_;
+  JointLog row_;   // the row being written (memory reused cycle after cycle)
+  JointLogCsvWriter writer_;
   uint64_t rows_ = 0;
 };
 

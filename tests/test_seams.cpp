@@ -1,0 +1,369 @@
+// Tests across the folders' seams, through the `csp` command as a user runs it: what one command
+// writes, the next reads (docs/joint-log.md). Subprocess runs are a few seconds of robot time.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sys/stat.h>
+
+#include "bridge_support.hpp"
+#include "csp/bridge/csv_convert.hpp"
+#include "csp/io/joint_log.hpp"
+
+namespace csp {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kCsp = CSP_EXECUTABLE;
+const std::string kRealLog = std::string(CSP_SHARED_DATA_DIR) + "/real/panda_exciting_traj_1.csv";
+const std::string kScenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml";
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Runs `csp args...` and returns its exit code; its output goes to `output` (shown on failure).
+int run_csp(const std::vector<std::string>& args, const std::string& output) {
+  std::vector<std::string> argv{kCsp};
+  argv.insert(argv.end(), args.begin(), args.end());
+  test::Process process(argv, output);
+  return process.wait(120s);
+}
+
+// `csp gap --log LOG [extra...] --json OUT`; the JSON.
+nlohmann::json gap_json(const std::string& log, const std::vector<std::string>& extra, const std::string& name) {
+  const std::string json = test::temp_path(name + ".json"), out = test::temp_path(name + ".out");
+  std::vector<std::string> args{"gap", "--log", log, "--json", json};
+  args.insert(args.end(), extra.begin(), extra.end());
+  EXPECT_EQ(run_csp(args, out), 0) << read_text(out);
+  std::ifstream in(json);
+  return nlohmann::json::parse(in);
+}
+
+// The joint-log format itself (csp/io/joint_log.hpp).
+
+std::string read_error(const std::string& path) {
+  try {
+    read_joint_log_csv(path);
+  } catch (const JointLogError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const std::string path = test::temp_path(name);
+  std::ofstream(path) << text;
+  return path;
+}
+
+const std::string kHeader =
+    "t,q1,q2,q3,q4,q5,q6,q7,dq1,dq2,dq3,dq4,dq5,dq6,dq7,tau_J1,tau_J2,tau_J3,tau_J4,tau_J5,tau_J6,tau_J7";
+const std::string kRow = ",1,2,3,4,5,6,7,1,2,3,4,5,6,7,1,2,3,4,5,6,7\n";
+
+// The real Panda log reads as it is: every value equals the text's nearest double.
+TEST(JointLogFormat, RealPandaLogReadsUnchanged) {
+  const JointLog log = read_joint_log_csv(kRealLog);
+  std::ifstream in(kRealLog);
+  std::string line;
+  std::getline(in, line);
+  ASSERT_EQ(line, kHeader);
+  std::size_t row = 0;
+  while (std::getline(in, line)) {
+    std::stringstream cells(line);
+    std::vector<double> v;
+    for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::strtod(cell.c_str(), nullptr));
+    ASSERT_EQ(v.size(), 22u);
+    ASSERT_EQ(log.t[row], v[0]);
+    for (int j = 0; j < 7; ++j) {
+      ASSERT_EQ(log.q[row][j], v[1 + j]);
+      ASSERT_EQ(log.dq[row][j], v[8 + j]);
+      ASSERT_EQ(log.tau_J[row][j], v[15 + j]);
+    }
+    ++row;
+  }
+  EXPECT_EQ(log.size(), row);
+  EXPECT_EQ(row, 20544u);
+  EXPECT_TRUE(log.tau_J_d.empty() && log.robot_mode.empty() && log.extensions.empty());
+}
+
+// Every group and an extension column: write, read, write gives the same bytes and values.
+TEST(JointLogFormat, EveryGroupRoundTripsToTheSameBytes) {
+  JointLog log;
+  for (int k = 0; k < 3; ++k) {
+    log.t.push_back(0.001 * k);
+    for (const ColumnGroup& group : kJointLogSchema)
+      std::visit(
+          [&](auto member) {
+            auto& series = log.*member;
+            using Value = typename std::decay_t<decltype(series)>::value_type;
+            if constexpr (std::is_same_v<Value, std::string>) series.push_back("Word" + std::to_string(k));
+            else if constexpr (std::is_same_v<Value, double>) {
+              if (&series != &log.t) series.push_back(1.0 / 3.0 + k);
+            } else series.push_back(Value::LinSpaced(-1.0 / 7.0 + k, 1e-17 * (k + 1)));
+          },
+          group.member);
+  }
+  log.extensions.push_back({"x_temperature", {20.5, 21.0, 0.1}});
+  const std::string a = test::temp_path("all_groups_a.csv"), b = test::temp_path("all_groups_b.csv");
+  write_joint_log_csv(a, log);
+  const JointLog back = read_joint_log_csv(a);
+  write_joint_log_csv(b, back);
+  EXPECT_EQ(read_text(a), read_text(b));
+  EXPECT_EQ(back.O_T_EE, log.O_T_EE);
+  EXPECT_EQ(back.q_d, log.q_d);
+  EXPECT_EQ(back.current_errors, log.current_errors);
+  ASSERT_EQ(back.extensions.size(), 1u);
+  EXPECT_EQ(back.extensions[0].name, "x_temperature");
+  EXPECT_EQ(back.extensions[0].values, log.extensions[0].values);
+  const std::string header = read_text(a).substr(0, read_text(a).find('\n'));
+  EXPECT_EQ(header.rfind(kHeader + ",ddq1,", 0), 0u) << header;
+  EXPECT_NE(header.find(",O_T_EE16,robot_mode,command_received,control_command_success_rate,current_errors,x_temperature"),
+            std::string::npos)
+      << header;
+}
+
+// A typo is an error that names the column, where it is, and the column it probably meant.
+TEST(JointLogFormat, UnknownColumnsNameTheClosestKnownOne) {
+  struct Case {
+    std::string bad, expected;
+  };
+  const std::vector<Case> cases = {
+      {"tau_j3", ":1: column 18: unknown column `tau_j3`; did you mean `tau_J3`?"},
+      {"TAU_J_D1", "unknown column `TAU_J_D1`; did you mean `tau_J_d1`?"},
+      {"tau_ext_hat_filterd2", "did you mean `tau_ext_hat_filtered2`?"},
+      {"temperature", "unknown column `temperature`. Columns of your own must start with `x_`"},
+  };
+  for (const Case& c : cases) {
+    std::string header = kHeader;
+    header.replace(header.find("tau_J3"), 6, c.bad);
+    const std::string path = write_file("typo.csv", header + "\n0" + kRow + "0.001" + kRow);
+    const std::string message = read_error(path);
+    EXPECT_EQ(message.rfind(path + ":1: column 18: ", 0), 0u) << message;
+    EXPECT_NE(message.find(c.expected), std::string::npos) << message;
+  }
+  // The columns the emulator writes are known: its own log reads back.
+  const std::string emulated = write_file("known.csv", kHeader + ",q_d1,q_d2,q_d3,q_d4,q_d5,q_d6,q_d7\n0" + kRow.substr(0, kRow.size() - 1) +
+                                                           ",1,2,3,4,5,6,7\n0.001" + kRow.substr(0, kRow.size() - 1) +
+                                                           ",1,2,3,4,5,6,7\n");
+  EXPECT_EQ(read_joint_log_csv(emulated).q_d.size(), 2u);
+}
+
+// A FIFO or a directory is refused at once (opening a FIFO would wait for a writer forever).
+TEST(JointLogFormat, RefusesFifoAndDirectory) {
+  const std::string fifo = test::temp_path("log.fifo"), directory = test::temp_path("log_dir");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  std::filesystem::create_directories(directory);
+  for (const std::string& path : {fifo, directory}) {
+    const std::string message = read_error(path);
+    EXPECT_EQ(message, path + ": not a regular file (a directory, FIFO or device); expected a joint log");
+  }
+  std::filesystem::remove(fifo);
+  std::filesystem::remove(directory);
+}
+
+// docs/joint-log.md documents every group of the schema (so the docs cannot fall behind it).
+TEST(JointLogFormat, DocsNameEverySchemaGroup) {
+  const std::string docs = read_text(std::string(CSP_SOURCE_DIR) + "/docs/joint-log.md");
+  ASSERT_FALSE(docs.empty());
+  for (const ColumnGroup& group : kJointLogSchema) {
+    const std::string row = "| `" + std::string(group.name) + "` |";
+    EXPECT_NE(docs.find(row), std::string::npos) << "docs/joint-log.md has no table row for " << group.name;
+  }
+  EXPECT_NE(docs.find("`" + std::string(kExtensionPrefix) + "`"), std::string::npos);
+}
+
+// Every number of two diagnoses equal to 12 significant digits, everything else exactly.
+void expect_same_figures(const nlohmann::json& a, const nlohmann::json& b, const std::string& path) {
+  if (a.is_number() && b.is_number()) {
+    const double x = a, y = b;
+    EXPECT_NEAR(x, y, 1e-12 * std::max({1.0, std::abs(x), std::abs(y)})) << path;
+  } else if (a.is_object() && b.is_object()) {
+    ASSERT_EQ(a.size(), b.size()) << path;
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      ASSERT_TRUE(b.contains(it.key())) << path << "/" << it.key();
+      expect_same_figures(it.value(), b.at(it.key()), path + "/" + it.key());
+    }
+  } else if (a.is_array() && b.is_array()) {
+    ASSERT_EQ(a.size(), b.size()) << path;
+    for (std::size_t i = 0; i < a.size(); ++i) expect_same_figures(a[i], b[i], path + "/" + std::to_string(i));
+  } else {
+    EXPECT_EQ(a, b) << path;
+  }
+}
+
+// (a) csp emulate --log writes what csp gap reads.
+TEST(Seams, EmulateLogIsReadByGap) {
+  const std::string csv = test::temp_path("emulate.csv"), out = test::temp_path("emulate.out");
+  ASSERT_EQ(run_csp({"emulate", "--duration", "2", "--log", csv}, out), 0) << read_text(out);
+  const JointLog log = read_joint_log_csv(csv);
+  EXPECT_EQ(log.size(), 2001u);   // the start state and 2000 cycles
+  EXPECT_EQ(log.q_d.size(), log.size());
+  EXPECT_EQ(log.robot_mode[1000], "Move");
+  const nlohmann::json j = gap_json(csv, {"--inertia", "libfranka_fit", "--friction", "none", "--ee", "hand"}, "emulate_gap");
+  EXPECT_EQ(j.at("baseline").at("heldout_rms").size(), 7u);
+  EXPECT_TRUE(j.at("verdict").at("causes").is_array());
+  std::filesystem::remove(csv);
+}
+
+// The emulator's CSV -> csp log import -> csp log export: every group the emulator writes maps into
+// robot_state_t and back, so the same bytes come out.
+TEST(Seams, EmulatedCsvSurvivesImportAndExportByteForByte) {
+  const std::string csv = test::temp_path("emulated.csv"), lcm_log = test::temp_path("emulated.lcmlog"),
+                    exported = test::temp_path("emulated_exported.csv"), out = test::temp_path("import_export.out");
+  ASSERT_EQ(run_csp({"emulate", "--duration", "1", "--log", csv}, out), 0) << read_text(out);
+  ASSERT_EQ(run_csp({"log", "import", csv, "--out", lcm_log}, out), 0) << read_text(out);
+  ASSERT_EQ(run_csp({"log", "export", lcm_log, "--out", exported}, out), 0) << read_text(out);
+  const std::string original = read_text(csv);
+  EXPECT_EQ(std::count(original.begin(), original.end(), '\n'), 1002) << "header, start state, 1000 cycles";
+  EXPECT_EQ(read_text(exported), original);
+  for (const std::string& f : {csv, lcm_log, exported}) std::filesystem::remove(f);
+}
+
+// (b) csp serve (lockstep) + the external controller process -> LCM log -> csp gap, directly and
+// through csp log export: the same rows, so the same verdict and the same figures.
+TEST(Seams, ServedLcmLogGivesTheSameDiagnosisDirectlyAndViaExport) {
+  const std::string url = test::unique_lcm_url(0), lcm_log = test::temp_path("served.lcmlog"),
+                    csv = test::temp_path("served.csv");
+  test::Process server({kCsp, "serve", kScenario, "--clock", "lockstep", "--wait", "--duration", "2.1",
+                        "--lockstep-timeout", "5", "--lcm-url", url, "--log", lcm_log},
+                       test::temp_path("serve.out"));
+  test::Process controller({CSP_LCM_JOINT_IMPEDANCE, "--lcm-url", url, "--duration", "2", "--amplitude", "0.2",
+                            "--timeout", "30"},
+                           test::temp_path("controller.out"));
+  ASSERT_EQ(controller.wait(60s), 0) << controller.output();
+  ASSERT_EQ(server.wait(30s), 0) << server.output();
+
+  const std::string export_out = test::temp_path("export.out");
+  ASSERT_EQ(run_csp({"log", "export", lcm_log, "--out", csv}, export_out), 0) << read_text(export_out);
+  const std::vector<std::string> model{"--inertia", "libfranka_fit", "--friction", "none", "--ee", "hand"};
+  const nlohmann::json direct = gap_json(lcm_log, model, "served_direct"), exported = gap_json(csv, model, "served_csv");
+  EXPECT_EQ(direct.at("verdict").at("causes"), exported.at("verdict").at("causes"));
+  expect_same_figures(direct, exported, "");
+
+  // The rows themselves are the same, bit for bit. (The figures above agree to ~1e-15 only: the
+  // diagnosis's Eigen reductions peel to the input's memory alignment, which differs between the
+  // two readers' allocations.)
+  const JointLog from_lcm = bridge::read_joint_log_lcm(lcm_log, "CSP_STATE"), from_csv = read_joint_log_csv(csv);
+  EXPECT_EQ(from_lcm.size(), 2101u);
+  EXPECT_EQ(from_lcm.t, from_csv.t);
+  EXPECT_EQ(from_lcm.q, from_csv.q);
+  EXPECT_EQ(from_lcm.dq, from_csv.dq);
+  EXPECT_EQ(from_lcm.tau_J, from_csv.tau_J);
+  EXPECT_EQ(from_lcm.O_T_EE, from_csv.O_T_EE);
+  EXPECT_EQ(from_lcm.current_errors, from_csv.current_errors);
+  for (const std::string& f : {lcm_log, csv}) std::filesystem::remove(f);
+}
+
+// (c) The real Panda CSV -> csp log import -> csp replay --play (recorded by Debian's lcm-logger)
+// -> csp log export: q, dq and tau_J arrive unchanged and in order, t within the robot state's 1 ms
+// resolution. UDP multicast may drop datagrams when the machine is loaded (the logger then misses
+// a state): every row that arrives must be the real row, bit for bit, in order.
+TEST(Seams, RealCsvSurvivesImportReplayAndExport) {
+  const std::string url = test::unique_lcm_url(1), imported = test::temp_path("real.lcmlog"),
+                    recorded = test::temp_path("recorded.lcmlog"), csv = test::temp_path("recorded.csv");
+  const std::string import_out = test::temp_path("import.out");
+  ASSERT_EQ(run_csp({"log", "import", kRealLog, "--out", imported}, import_out), 0) << read_text(import_out);
+
+  // A 4 MB receive buffer (net.core.rmem_max here) instead of the default 208 kB: fewer losses.
+  test::Process logger({"/usr/bin/lcm-logger", "--lcm-url=" + url + "&recv_buf_size=4000000", "-f", "--flush-interval=10", recorded},
+                       test::temp_path("logger.out"));
+  lcm::LCM probe(url);
+  ASSERT_TRUE(probe.good());
+  ASSERT_TRUE(test::wait_until_logged(probe, recorded, "ready")) << logger.output();
+  const std::string replay_out = test::temp_path("replay.out");
+  ASSERT_EQ(run_csp({"replay", imported, "--play", "--speed", "4", "--lcm-url", url}, replay_out), 0)
+      << read_text(replay_out);
+  ASSERT_TRUE(test::wait_until_logged(probe, recorded, "end")) << logger.output();
+  logger.signal(SIGINT);
+  ASSERT_EQ(logger.wait(10s), 0) << logger.output();
+
+  const std::string export_out = test::temp_path("export_real.out");
+  ASSERT_EQ(run_csp({"log", "export", recorded, "--out", csv}, export_out), 0) << read_text(export_out);
+  const JointLog real = read_joint_log_csv(kRealLog);
+  // Read without the CSV reader's check on t: the real log has rows less than 0.5 ms apart, which
+  // the robot state's whole milliseconds cannot tell apart (see the disabled test below).
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  ASSERT_EQ(line.rfind(kHeader + ",", 0), 0u) << line;
+  std::size_t rows = 0, next = 0;   // rows arrived; the next real row they may be
+  while (std::getline(in, line)) {
+    std::stringstream cells(line);
+    std::vector<double> v;
+    for (std::string cell; std::getline(cells, cell, ',') && v.size() < 22;) v.push_back(std::strtod(cell.c_str(), nullptr));
+    const auto is_row = [&](std::size_t r) {
+      if (std::abs(v[0] - real.t[r]) > 0.5e-3 + 1e-12) return false;
+      for (int j = 0; j < 7; ++j)
+        if (v[1 + j] != real.q[r][j] || v[8 + j] != real.dq[r][j] || v[15 + j] != real.tau_J[r][j]) return false;
+      return true;
+    };
+    while (next < real.size() && !is_row(next)) ++next;
+    ASSERT_LT(next, real.size()) << "exported row " << rows << " (t = " << v[0] << ") is no real row after the previous one";
+    ++next;
+    ++rows;
+  }
+  // How many arrive depends on the machine's load (0.3-5 % lost at load 6-10 here), not on CSP.
+  EXPECT_GE(rows, real.size() / 2) << "of " << real.size() << " states, the logger recorded " << rows;
+  if (rows < real.size()) std::printf("the logger missed %zu of %zu states (UDP)\n", real.size() - rows, real.size());
+  for (const std::string& f : {imported, recorded, csv}) std::filesystem::remove(f);
+}
+
+// (c, gap) The same pipeline ending in csp gap, expected to give the real CSV's diagnosis. Disabled:
+// robot_state_t carries time in whole milliseconds (libfranka's RobotState::time), and 1092 rows of
+// the real log lie less than 0.5 ms after their predecessor, so after import they share a time
+// stamp and csp gap refuses the exported CSV ("time must increase"). Enabling it needs a sub-
+// millisecond sample time in the LCM row (a robot_state_t field; reported to the lead).
+TEST(Seams, DISABLED_RealCsvThroughLcmKeepsItsGapDiagnosis) {
+  const std::string imported = test::temp_path("real_gap.lcmlog"), csv = test::temp_path("real_gap.csv");
+  const std::string out = test::temp_path("real_gap.out");
+  ASSERT_EQ(run_csp({"log", "import", kRealLog, "--out", imported}, out), 0) << read_text(out);
+  ASSERT_EQ(run_csp({"log", "export", imported, "--out", csv}, out), 0) << read_text(out);
+  const std::vector<std::string> model{"--inertia", "gaz2019", "--friction", "none"};
+  EXPECT_EQ(gap_json(csv, model, "real_gap_exported"), gap_json(kRealLog, model, "real_gap_original"));
+}
+
+// (d) The default scenario emulated, diagnosed with the robot's own model (libfranka_fit inertia, no
+// friction, the hand) as the simulator. What really differs between that model and the emulated
+// data:
+// - the plant's inertial parameters (gaz2019 instead of libfranka_fit): inertial_parameters;
+// - the plant's link friction (Gaz et al.'s sigmoid; the simulator has none): joint_friction;
+// - the emulator's torque sensor reads the motor torque held over the last integration substep
+//   while q and dq are sampled at the cycle's end: tau_J lags the motion by a fraction of a cycle
+//   (the fitted delay is 0.59, 0.44, 0.27 ms with 1, 2, 10 substeps: a property of the integrator,
+//   so time_delay is a true finding, bounded by one cycle).
+// What does not differ: both have the Franka Hand and no load (no payload), the base is level and
+// gravity the same in both (no base_tilt), sensor bias and noise are off (no sensor_offset), the
+// plant has no armature (no armature). The run stops at 5.9 s, before the scenario's push on the
+// hand at 6 s (an external wrench no effect of the library models).
+TEST(Seams, EmulatedDefaultScenarioNamesWhatReallyDiffers) {
+  const std::string csv = test::temp_path("default.csv"), out = test::temp_path("default.out");
+  ASSERT_EQ(run_csp({"emulate", kScenario, "--duration", "5.9", "--log", csv}, out), 0) << read_text(out);
+  const nlohmann::json j = gap_json(csv, {"--inertia", "libfranka_fit", "--friction", "none", "--ee", "hand"}, "default");
+  const std::vector<std::string> causes = j.at("verdict").at("causes");
+  ASSERT_GE(causes.size(), 2u) << j.at("verdict").dump();
+  EXPECT_EQ(causes[0], "joint_friction");
+  EXPECT_EQ(causes[1], "inertial_parameters");
+  for (const std::string& cause : causes) {
+    EXPECT_TRUE(cause == "joint_friction" || cause == "inertial_parameters" || cause == "time_delay")
+        << "named " << cause << ", which the emulated robot does not have";
+    if (cause == "time_delay") {
+      const double delay_ms = j.at("verdict").at("params").at("time_delay").at("delay_ms");
+      EXPECT_GT(delay_ms, 0.0) << "the sensor lags the motion, it does not lead it";
+      EXPECT_LT(delay_ms, 1.0) << "the integrator's lag is less than one cycle";
+    }
+  }
+  EXPECT_LT(j.at("verdict").at("unexplained_fraction").get<double>(), 0.01);
+  std::filesystem::remove(csv);
+}
+
+}  // namespace
+}  // namespace csp
