@@ -25,7 +25,7 @@ struct EmulateArguments {
 // external torque, accumulated cycle by cycle.
 class Summary {
  public:
-  Summary(const rt::ExcitationTrajectory& trajectory, const Vector7& q0) : trajectory_(trajectory), q0_(q0) {}
+  Summary(const rt::RampedSineReference& trajectory, const Vector7& q0) : trajectory_(trajectory), q0_(q0) {}
 
   void add(const rt::RobotState& state, double motion_time) {
     Vector7 q_ref, dq_ref, ddq_ref;
@@ -52,7 +52,7 @@ class Summary {
   }
 
  private:
-  rt::ExcitationTrajectory trajectory_;
+  rt::RampedSineReference trajectory_;
   Vector7 q0_;
   Vector7 squared_error_ = Vector7::Zero(), max_error_ = Vector7::Zero(), max_tau_ext_ = Vector7::Zero();
   long long count_ = 0;

@@ -13,20 +13,13 @@
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "csp/dynamics/workspace.hpp"
-#include "svg_figure.hpp"
+#include "csp/io/svg_plot.hpp"
+#include "csp/io/workspace_figures.hpp"
 
 namespace csp::cli {
 namespace {
 
-// Franka's datasheet "maximum reach" of the Panda/FR3 arm [m].
-constexpr double kPublishedReach = 0.855;
 constexpr int kMaxGrid = 400;   // cells per axis; keeps the SVG files below a few MB
-
-std::string format(const char* pattern, auto... values) {
-  std::string out(static_cast<std::size_t>(std::max(0, std::snprintf(nullptr, 0, pattern, values...))), '\0');
-  std::snprintf(out.data(), out.size() + 1, pattern, values...);
-  return out;
-}
 
 std::string millimetres(double metres) { return format("%.1f mm", 1000.0 * metres); }
 
@@ -45,9 +38,10 @@ void write_point_row(std::ostream& out, const Vector3& flange, const Vector3& en
 
 // The 855 mm datasheet figure is for the arm's flange, so only the flange is compared with it.
 void print_statistics(const char* name, const ReachStatistics& s, const Vector3& shoulder, bool compare) {
-  const double excess = s.max_reach - kPublishedReach;
+  const double excess = s.max_reach - kFrankaDatasheetReach;
   std::cout << format("  %-13s max reach from the shoulder %s", name, millimetres(s.max_reach).c_str())
-            << (compare ? format(" (%+.1f mm, %+.2f%% vs Franka's 855 mm)\n", 1000.0 * excess, 100.0 * excess / kPublishedReach)
+            << (compare ? format(" (%+.1f mm, %+.2f%% vs Franka's 855 mm)\n", 1000.0 * excess,
+                                 100.0 * excess / kFrankaDatasheetReach)
                         : std::string(" (beyond the flange, not comparable with 855 mm)\n"))
             << format("  %-13s   at q = [%.3f, %.3f, %.3f, %.3f, %.3f, %.3f, %.3f] rad\n", "",
                       s.q_at_max_reach[0], s.q_at_max_reach[1], s.q_at_max_reach[2], s.q_at_max_reach[3],
@@ -55,21 +49,6 @@ void print_statistics(const char* name, const ReachStatistics& s, const Vector3&
             << format("  %-13s max horizontal radius (from the joint-1 axis) %s\n", "", millimetres(s.max_radius).c_str())
             << format("  %-13s z range [%s, %s] (shoulder at z = %s)\n", "", millimetres(s.z_min).c_str(),
                       millimetres(s.z_max).c_str(), millimetres(shoulder.z()).c_str());
-}
-
-// `measured` is the sampled radius drawn for comparison: max reach (side) or max horizontal radius (top).
-HeatMapFigure make_figure(const Histogram2D& h, const std::string& measured_label, double measured,
-                          const std::string& subtitle) {
-  HeatMapFigure f;
-  f.x_min = h.x_min, f.x_max = h.x_max, f.y_min = h.y_min, f.y_max = h.y_max;
-  f.nx = h.nx, f.ny = h.ny;
-  f.counts = h.counts;
-  f.subtitle = subtitle;
-  f.colour_label = format("samples per %.0f mm × %.0f mm cell (log scale)", 1000 * h.cell_width(), 1000 * h.cell_height());
-  // Drawn in this order: the dashed datasheet circle stays visible on top of the (nearly equal) sampled one.
-  f.circles.push_back({0, 0, measured, measured_label + " " + millimetres(measured), "#111111", false});
-  f.circles.push_back({0, 0, kPublishedReach, "Franka datasheet reach 855 mm", "#d62728", true});
-  return f;
 }
 
 }  // namespace
@@ -123,26 +102,9 @@ int run_workspace(const WorkspaceArguments& args) {
   // Figures of the end-effector positions (the flange itself when there is no end effector).
   const bool flange_only = model.parameters().F_T_EE.translation.isZero() && model.parameters().F_T_EE.rotation.isIdentity();
   const std::string robot = fs::path(args.model.robot).stem().string();
-  const std::string what = flange_only ? "flange" : "end effector (" + args.model.end_effector + ")";
-  const std::string subtitle = format("%lld uniform joint configurations, seed %lld; circles centred on the shoulder "
-                                      "(joint-2 origin)", args.samples, args.seed);
-  const ReachStatistics& shown = flange_only ? result.flange : result.end_effector;
-  HeatMapFigure side = make_figure(result.side, "sampled max reach from the shoulder", shown.max_reach, subtitle);
-  side.title = robot + " workspace, side view: " + what + " position";
-  side.x_label = "signed horizontal radius sign(x)·√(x² + y²) [m]";
-  side.y_label = "z [m]";
-  for (auto& c : side.circles) c.cy = result.shoulder.z();
-  side.markers = {{0.0, 0.0, "base", FigureMarker::Shape::kBase},
-                  {0.0, result.shoulder.z(), "shoulder (joint 2)", FigureMarker::Shape::kPoint}};
-  side.lines = {{0.0, "base plane z = 0"}};
-  HeatMapFigure top = make_figure(result.top, "sampled max horizontal radius", shown.max_radius, subtitle);
-  top.title = robot + " workspace, top view: " + what + " position";
-  top.x_label = "x [m]";
-  top.y_label = "y [m]";
-  for (auto& c : top.circles) c.cx = result.shoulder.x(), c.cy = result.shoulder.y();
-  top.markers = {{0.0, 0.0, "base / shoulder", FigureMarker::Shape::kBase}};
-  write_svg(side_path, side);
-  write_svg(top_path, top);
+  const WorkspaceFigures figures = workspace_figures(result, options, robot, flange_only ? "" : args.model.end_effector);
+  write_text_file(side_path, render_heat_map(figures.side));
+  write_text_file(top_path, render_heat_map(figures.top));
 
   std::cout << format("csp workspace: %s, end effector %s, %lld samples, seed %lld\n", robot.c_str(),
                       args.model.end_effector.c_str(), args.samples, args.seed)

@@ -130,7 +130,7 @@ TEST(GapSignal, FilteredSamplesFollowTheTrajectory) {
   const JointLog log = plain_log(model, duration, 7, false);
   const FilterOptions filter;
   const Samples s = filter_log(log, filter);
-  const ExcitationTrajectory trajectory(model.parameters().joint_limits, 7);
+  const FourierExcitation trajectory(model.parameters().joint_limits, 7);
   // One sample per period over the log minus half a window at each end.
   EXPECT_NEAR(static_cast<double>(s.size()), (duration - filter.window) / filter.sample_period, 2.0);
   double worst_ddq = 0.0, worst_dq = 0.0;

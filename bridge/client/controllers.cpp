@@ -25,7 +25,7 @@ rt::Controller float_controller(const Vector7& damping, double duration) {
 }
 
 rt::Controller joint_impedance_controller(const Vector7& stiffness, const Vector7& damping,
-                                          const rt::ExcitationTrajectory& trajectory, double duration) {
+                                          const rt::RampedSineReference& trajectory, double duration) {
   struct Context {
     MotionClock clock;
     Vector7 q0;
@@ -44,8 +44,8 @@ rt::Controller joint_impedance_controller(const Vector7& stiffness, const Vector
 Vector7 example_joint_stiffness() { return (Vector7() << 600, 600, 600, 600, 250, 150, 50).finished(); }
 Vector7 example_joint_damping() { return (Vector7() << 50, 50, 50, 20, 20, 20, 10).finished(); }
 
-rt::ExcitationTrajectory example_excitation(double amplitude) {
-  rt::ExcitationTrajectory trajectory;
+rt::RampedSineReference example_excitation(double amplitude) {
+  rt::RampedSineReference trajectory;
   trajectory.amplitude = Vector7::Constant(amplitude);
   trajectory.frequency_hz << 0.12, 0.17, 0.21, 0.15, 0.25, 0.19, 0.3;   // as configs/scenarios/default.yaml
   trajectory.ramp = 1.0;

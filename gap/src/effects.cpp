@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/friction.hpp"
 #include "csp/dynamics/model.hpp"
 
 namespace csp::gap {
@@ -21,8 +22,6 @@ std::vector<double> values(const VectorXd& v, Eigen::Index begin, Eigen::Index c
   for (Eigen::Index i = 0; i < count; ++i) out.push_back(v[begin + i * stride]);
   return out;
 }
-
-double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
 // --- sensor_offset: a constant bias per joint torque sensor -------------------------------------
 class SensorOffset : public LinearEffect {
@@ -182,7 +181,7 @@ class Payload : public Effect {
 };
 
 // --- joint_friction: per joint, phi1 (s(phi2 (dq + phi3)) - s(phi2 phi3)) + f_v dq ---------------
-// The Gaz et al. (2019) sigmoid (s the logistic function; zero at rest) plus viscous friction; a
+// The Gaz et al. (2019) sigmoid (gaz_friction; s the logistic function) plus viscous friction; a
 // steep sigmoid with phi3 = 0 is Coulomb friction of phi1 / 2. Parameters per joint:
 // (phi1, ln phi2, phi3, f_v); ln phi2 keeps phi2 positive.
 class JointFriction : public Effect {
@@ -205,12 +204,11 @@ class JointFriction : public Effect {
     for (Eigen::Index r = 0; r < part.rows(); ++r) {
       const int j = static_cast<int>(r % kNumJoints);
       const double dq = part.samples.dq[r / kNumJoints][j];
-      const double phi1 = theta[4 * j], phi2 = std::exp(theta[4 * j + 1]), phi3 = theta[4 * j + 2];
-      const double s1 = logistic(phi2 * (dq + phi3)), s0 = logistic(phi2 * phi3);
-      const double d1 = s1 * (1.0 - s1), d0 = s0 * (1.0 - s0);
-      J(r, 4 * j) = s1 - s0;
-      J(r, 4 * j + 1) = phi1 * phi2 * (d1 * (dq + phi3) - d0 * phi3);
-      J(r, 4 * j + 2) = phi1 * phi2 * (d1 - d0);
+      const double phi2 = std::exp(theta[4 * j + 1]);
+      const GazFrictionGradient gradient = gaz_friction_gradient(theta[4 * j], phi2, theta[4 * j + 2], dq);
+      J(r, 4 * j) = gradient.phi1;
+      J(r, 4 * j + 1) = phi2 * gradient.phi2;   // d/d(ln phi2) = phi2 d/dphi2
+      J(r, 4 * j + 2) = gradient.phi3;
       J(r, 4 * j + 3) = dq;
     }
     return J;
@@ -257,7 +255,7 @@ class JointFriction : public Effect {
 }  // namespace
 
 double friction_law(double phi1, double phi2, double phi3, double viscous, double dq) {
-  return phi1 * (logistic(phi2 * (dq + phi3)) - logistic(phi2 * phi3)) + viscous * dq;
+  return gaz_friction(phi1, phi2, phi3, dq) + viscous * dq;
 }
 
 MatrixXd Effect::jacobian(const Part& part, const VectorXd& theta) const {

@@ -69,7 +69,7 @@ InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b) {
   return m;
 }
 
-ExcitationTrajectory::ExcitationTrajectory(const JointLimits& limits, unsigned seed, double period)
+FourierExcitation::FourierExcitation(const JointLimits& limits, unsigned seed, double period)
     : omega_(2.0 * M_PI / period) {
   std::mt19937_64 engine(seed);
   std::normal_distribution<double> normal;
@@ -91,7 +91,7 @@ ExcitationTrajectory::ExcitationTrajectory(const JointLimits& limits, unsigned s
   }
 }
 
-void ExcitationTrajectory::state(double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
+void FourierExcitation::state(double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
   q = centre_, dq.setZero(), ddq.setZero();
   for (int l = 0; l < kHarmonics; ++l) {
     const double w = (l + 1) * omega_, s = std::sin(w * t), c = std::cos(w * t);
@@ -114,7 +114,7 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
   p.load = combine(p.load, truth.payload);
   p.gravity = rotation_x(truth.tilt_x) * rotation_y(truth.tilt_y) * p.gravity;
   const Model true_model(p);
-  const ExcitationTrajectory trajectory(p.joint_limits, trajectory_seed);
+  const FourierExcitation trajectory(p.joint_limits, trajectory_seed);
 
   std::mt19937_64 engine(noise_seed);
   std::normal_distribution<double> normal;

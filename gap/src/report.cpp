@@ -1,105 +1,13 @@
 #include "csp/gap/report.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <stdexcept>
+
+#include "csp/io/svg_plot.hpp"
 
 namespace csp::gap {
 namespace {
-
-std::string format(const char* pattern, auto... values) {
-  std::string out(static_cast<std::size_t>(std::max(0, std::snprintf(nullptr, 0, pattern, values...))), '\0');
-  std::snprintf(out.data(), out.size() + 1, pattern, values...);
-  return out;
-}
-
-std::string escape(const std::string& text) {
-  std::string out;
-  for (char c : text) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
-  return out;
-}
-
-// A "nice" tick step for the range (1, 2 or 5 times a power of ten, about 5 ticks).
-double tick_step(double range) {
-  const double raw = range / 5.0, power = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0})
-    if (m * power >= raw) return m * power;
-  return 10.0 * power;
-}
-
-constexpr double kPanelWidth = 460, kPanelHeight = 230, kLeft = 60, kTop = 30, kPlotWidth = 370, kPlotHeight = 160;
-
-void render_panel(std::ostream& svg, const PlotPanel& panel, double x0, double y0) {
-  const bool bars = !panel.bar_labels.empty();
-  double x_min = bars ? 0.0 : 1e300, x_max = bars ? 1e-12 : -1e300, y_min = 1e300, y_max = -1e300;
-  for (const PlotSeries& s : panel.series)
-    for (std::size_t i = 0; i < s.y.size(); ++i) {
-      const double x = bars ? s.y[i] : s.x[i];
-      x_min = std::min(x_min, x), x_max = std::max(x_max, x), y_min = std::min(y_min, s.y[i]),
-      y_max = std::max(y_max, s.y[i]);
-    }
-  if (bars) y_min = 0.0, y_max = static_cast<double>(panel.bar_labels.size());
-  if (!(x_max > x_min)) x_max = x_min + 1.0;
-  if (!(y_max > y_min)) y_max = y_min + 1.0;
-  auto px = [&](double x) { return x0 + kLeft + (x - x_min) / (x_max - x_min) * kPlotWidth; };
-  auto py = [&](double y) { return y0 + kTop + kPlotHeight - (y - y_min) / (y_max - y_min) * kPlotHeight; };
-
-  svg << format("<rect x='%.1f' y='%.1f' width='%.1f' height='%.1f' fill='none' stroke='#444'/>\n", x0 + kLeft,
-                y0 + kTop, kPlotWidth, kPlotHeight)
-      << format("<text x='%.1f' y='%.1f' font-size='13' text-anchor='middle'>%s</text>\n", x0 + kLeft + kPlotWidth / 2,
-                y0 + 18, escape(panel.title).c_str())
-      << format("<text x='%.1f' y='%.1f' font-size='11' text-anchor='middle'>%s</text>\n", x0 + kLeft + kPlotWidth / 2,
-                y0 + kTop + kPlotHeight + 32, escape(panel.x_label).c_str())
-      << format(
-             "<text x='%.1f' y='%.1f' font-size='11' text-anchor='middle' transform='rotate(-90 %.1f "
-             "%.1f)'>%s</text>\n",
-             x0 + 14, y0 + kTop + kPlotHeight / 2, x0 + 14, y0 + kTop + kPlotHeight / 2, escape(panel.y_label).c_str());
-  const double xs = tick_step(x_max - x_min);
-  for (double t = std::ceil(x_min / xs) * xs; t <= x_max + 1e-12; t += xs)
-    svg << format("<text x='%.1f' y='%.1f' font-size='10' text-anchor='middle'>%g</text>\n", px(t),
-                  y0 + kTop + kPlotHeight + 14, std::abs(t) < 1e-12 * xs ? 0.0 : t);
-  if (bars) {
-    for (std::size_t i = 0; i < panel.bar_labels.size(); ++i) {
-      const double value = panel.series[0].y[i], top = py(static_cast<double>(panel.bar_labels.size() - i)) + 3;
-      svg << format("<rect x='%.1f' y='%.1f' width='%.1f' height='%.1f' fill='%s'/>\n", px(0.0), top,
-                    std::max(0.0, px(value) - px(0.0)), kPlotHeight / static_cast<double>(panel.bar_labels.size()) - 6,
-                    panel.series[0].colour.c_str())
-          << format("<text x='%.1f' y='%.1f' font-size='10'>%s</text>\n", px(0.0) + 4,
-                    top + kPlotHeight / static_cast<double>(panel.bar_labels.size()) / 2,
-                    escape(panel.bar_labels[i]).c_str());
-    }
-    return;
-  }
-  const double ys = tick_step(y_max - y_min);
-  for (double t = std::ceil(y_min / ys) * ys; t <= y_max + 1e-12; t += ys)
-    svg << format("<text x='%.1f' y='%.1f' font-size='10' text-anchor='end'>%g</text>\n", x0 + kLeft - 4, py(t) + 3,
-                  std::abs(t) < 1e-12 * ys ? 0.0 : t);
-  double legend_y = y0 + kTop + 12;
-  for (const PlotSeries& s : panel.series) {
-    if (s.points) {
-      for (std::size_t i = 0; i < s.x.size(); ++i)
-        svg << format("<circle cx='%.1f' cy='%.1f' r='1.2' fill='%s' fill-opacity='0.5'/>\n", px(s.x[i]), py(s.y[i]),
-                      s.colour.c_str());
-    } else {
-      svg << "<polyline fill='none' stroke-width='1' stroke='" << s.colour << "' points='";
-      for (std::size_t i = 0; i < s.x.size(); ++i) svg << format("%.1f,%.1f ", px(s.x[i]), py(s.y[i]));
-      svg << "'/>\n";
-    }
-    if (!s.label.empty())
-      svg << format("<text x='%.1f' y='%.1f' font-size='10' fill='%s'>%s</text>\n", x0 + kLeft + 6, legend_y,
-                    s.colour.c_str(), escape(s.label).c_str());
-    legend_y += 12;
-  }
-}
-
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + path.string());
-}
 
 std::vector<double> joint_series(const Eigen::VectorXd& stacked, int joint) {
   std::vector<double> out;
@@ -114,21 +22,6 @@ std::string joint_row(const char* name, const Vector7& v) {
 }
 
 }  // namespace
-
-std::string render_panels(const std::string& title, const std::vector<PlotPanel>& panels, int columns) {
-  const int rows = (static_cast<int>(panels.size()) + columns - 1) / columns;
-  std::ostringstream svg;
-  svg << format("<svg xmlns='http://www.w3.org/2000/svg' width='%.0f' height='%.0f' font-family='sans-serif'>\n",
-                columns * kPanelWidth, rows * kPanelHeight + 30)
-      << "<rect width='100%' height='100%' fill='white'/>\n"
-      << format("<text x='%.1f' y='20' font-size='15' text-anchor='middle'>%s</text>\n", columns * kPanelWidth / 2,
-                escape(title).c_str());
-  for (std::size_t i = 0; i < panels.size(); ++i)
-    render_panel(svg, panels[i], static_cast<double>(i % static_cast<std::size_t>(columns)) * kPanelWidth,
-                 30 + static_cast<double>(i / static_cast<std::size_t>(columns)) * kPanelHeight);
-  svg << "</svg>\n";
-  return svg.str();
-}
 
 std::string summary(const Diagnosis& d) {
   std::string out = "where the gap lies (residual = measured - predicted, both parts):\n";
@@ -188,11 +81,13 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
     ranking.bar_labels.push_back(
         format("%s %.1f%%%s", e.name.c_str(), 100 * e.explained_fraction, e.significant ? " *" : ""));
   }
-  write_text(fs::path(dir) / "torque_heldout.svg",
-             render_panels("Held-out part: measured vs predicted joint torque", torque, 2));
-  write_text(fs::path(dir) / "residual_vs_velocity.svg",
-             render_panels("Residual (measured - predicted) vs joint velocity", velocity, 2));
-  write_text(fs::path(dir) / "effect_ranking.svg", render_panels("Effect ranking (* = significant)", {ranking}, 1));
+  const fs::path folder(dir);
+  write_text_file((folder / "torque_heldout.svg").string(),
+                  render_panels("Held-out part: measured vs predicted joint torque", torque, 2));
+  write_text_file((folder / "residual_vs_velocity.svg").string(),
+                  render_panels("Residual (measured - predicted) vs joint velocity", velocity, 2));
+  write_text_file((folder / "effect_ranking.svg").string(),
+                  render_panels("Effect ranking (* = significant)", {ranking}, 1));
 
   std::string md = "# Sim-to-real gap report\n\n`" + command_line + "`\n\n";
   md += format("Training: %s (%zu samples); held out: %s (%zu samples).\n\n", d.train.samples.source.c_str(),
@@ -219,7 +114,7 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
   md += "\n![ranking](effect_ranking.svg)\n\n## Where the gap lies\n\n```\n" + summary(d) + "```\n\n";
   md += "![residual vs velocity](residual_vs_velocity.svg)\n\n## Fitted parameters of the causes\n\n```json\n" +
         d.verdict_params.dump(2) + "\n```\n";
-  write_text(fs::path(dir) / "report.md", md);
+  write_text_file((folder / "report.md").string(), md);
 }
 
 }  // namespace csp::gap

@@ -51,7 +51,7 @@ ModelParameters build_model(const RobotConfig& robot, const ModelOptions& option
   }
 }
 
-void read_trajectory(const Field& f, ExcitationTrajectory& trajectory) {
+void read_trajectory(const Field& f, RampedSineReference& trajectory) {
   f.allow_only({"amplitude", "frequency_hz", "phase", "ramp"});
   trajectory.amplitude = non_negative7(f["amplitude"]);
   trajectory.frequency_hz = non_negative7(f["frequency_hz"]);
@@ -145,7 +145,7 @@ ExternalWrench read_wrench(const Field& f) {
 
 }  // namespace
 
-void ExcitationTrajectory::evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
+void RampedSineReference::evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
   // Quintic ramp r(x) = 10x^3 - 15x^4 + 6x^5, x = t / ramp: r, r', r'' vanish at both ends but r(1) = 1.
   double r = 1.0, dr = 0.0, ddr = 0.0;
   if (ramp > 0.0 && t < ramp) {

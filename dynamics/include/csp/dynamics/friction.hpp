@@ -15,7 +15,18 @@ struct FrictionModel {
   Vector7 viscous = Vector7::Zero(), coulomb = Vector7::Zero(), offset = Vector7::Zero();
 };
 
-// tau_f(dq). Gaz sigmoid: phi1/(1+exp(-phi2 (dq+phi3))) - phi1/(1+exp(-phi2 phi3)), zero at rest.
+// The Gaz et al. (2019) law of one joint, zero at rest (docs/seed-errata.md):
+//   tau_f = phi1/(1+exp(-phi2 (dq+phi3))) - phi1/(1+exp(-phi2 phi3)).
+double gaz_friction(double phi1, double phi2, double phi3, double dq);
+
+// Partial derivatives of gaz_friction with respect to its parameters (for fitting them).
+struct GazFrictionGradient {
+  double phi1 = 0.0, phi2 = 0.0, phi3 = 0.0;
+};
+GazFrictionGradient gaz_friction_gradient(double phi1, double phi2, double phi3, double dq);
+
+// tau_f(dq) of every joint: zero (kNone), gaz_friction per joint (kGazSigmoid), or
+// viscous dq + coulomb sign(dq) + offset (kLinear).
 Vector7 friction_torque(const FrictionModel& friction, const Vector7& dq);
 
 }  // namespace csp

@@ -28,11 +28,13 @@ InjectedEffects realistic_effect(const std::string& name, const Model& model, un
 // Both injections (each sets different fields).
 InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b);
 
+// The generator's excitation: a finite Fourier series per joint (as Gaz et al.'s real trajectories),
 // q(t) = centre + sum_l a_l sin(l w t) + b_l cos(l w t), l = 1..5, scaled per joint to stay within
 // 80 % of the position range, 70 % of the velocity limit and 40 % of the acceleration limit.
-class ExcitationTrajectory {
+// The planner (planners/) will own excitation trajectories; this one then moves there.
+class FourierExcitation {
  public:
-  ExcitationTrajectory(const JointLimits& limits, unsigned seed, double period = 10.0);
+  FourierExcitation(const JointLimits& limits, unsigned seed, double period = 10.0);
   void state(double t, Vector7& q, Vector7& dq, Vector7& ddq) const;
 
  private:

@@ -3,24 +3,10 @@
 #pragma once
 
 #include <string>
-#include <vector>
 
 #include "csp/gap/diagnosis.hpp"
 
 namespace csp::gap {
-
-// A figure of panels sharing one style: lines, points or horizontal bars.
-struct PlotSeries {
-  std::string label, colour;
-  std::vector<double> x, y;
-  bool points = false;
-};
-struct PlotPanel {
-  std::string title, x_label, y_label;
-  std::vector<PlotSeries> series;
-  std::vector<std::string> bar_labels;  // non-empty: a bar chart, series[0].y the bar lengths
-};
-std::string render_panels(const std::string& title, const std::vector<PlotPanel>& panels, int columns);
 
 // Writes report.md, torque_heldout.svg, residual_vs_velocity.svg, effect_ranking.svg into `dir`
 // (created if missing); throws std::runtime_error naming what cannot be written.

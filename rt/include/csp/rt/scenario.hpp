@@ -13,9 +13,10 @@
 
 namespace csp::rt {
 
-// A smooth excitation around the start pose: q_d = q0 + r(t) A (sin(2 pi f t + phase) - sin(phase)),
-// r a quintic ramp from 0 to 1 over `ramp` seconds, so q_d starts at q0 at rest.
-struct ExcitationTrajectory {
+// The scenario controller's reference: one sine per joint around the start pose, ramped in,
+// q_d = q0 + r(t) A (sin(2 pi f t + phase) - sin(phase)), r a quintic ramp from 0 to 1 over
+// `ramp` seconds, so q_d starts at q0 at rest.
+struct RampedSineReference {
   Vector7 amplitude = Vector7::Zero();      // [rad]
   Vector7 frequency_hz = Vector7::Zero();   // [Hz]
   Vector7 phase = Vector7::Zero();          // [rad]
@@ -34,7 +35,7 @@ struct ControllerSpec {
   Vector7 damping = Vector7::Zero();     // float, joint_impedance [N m s/rad]
   bool feedforward = true;               // joint_impedance: add M(q) ddq_d + c(q, dq)
   double translational_stiffness = 150.0, rotational_stiffness = 10.0;   // cartesian_impedance
-  ExcitationTrajectory trajectory;       // zero amplitude: hold the start pose
+  RampedSineReference trajectory;       // zero amplitude: hold the start pose
 };
 
 // Faults of the controller itself, at motion time [s].

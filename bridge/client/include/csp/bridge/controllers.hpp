@@ -14,12 +14,12 @@ rt::Controller float_controller(const Vector7& damping, double duration);
 // Joint impedance tracking of `trajectory` around the pose the session starts from:
 // tau = K (q_d - q) + D (dq_d - dq); motion_finished after `duration` [s].
 rt::Controller joint_impedance_controller(const Vector7& stiffness, const Vector7& damping,
-                                          const rt::ExcitationTrajectory& trajectory, double duration);
+                                          const rt::RampedSineReference& trajectory, double duration);
 
 // The example's settings (also used by the tests' in-process reference): libfranka's
 // joint_impedance_control gains, and a smooth excitation of `amplitude` on every joint.
 Vector7 example_joint_stiffness();
 Vector7 example_joint_damping();
-rt::ExcitationTrajectory example_excitation(double amplitude);
+rt::RampedSineReference example_excitation(double amplitude);
 
 }  // namespace csp::bridge
