@@ -154,7 +154,7 @@ TEST(RobotStateFields, LcmConversionCarriesEveryField) {
   state.robot_mode = rt::RobotMode::kMove;
   state.time = rt::Duration(4321);
 
-  const bridge::robot_state_t message = bridge::to_message(state, 99, true);
+  const robot_state_t message = bridge::to_message(state, 99, true);
   const RobotState back = bridge::from_message(message);
   double expected = 1.0;
   const auto check = [&](const char* name, const auto& in_state, const auto& in_message, const auto& after) {
