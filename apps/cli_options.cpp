@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "csp/dynamics/arrays.hpp"
+
 namespace csp::cli {
 
 std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::string& name) {
@@ -27,12 +29,12 @@ std::vector<double> parse_numbers(const std::string& text, std::size_t count, co
 
 Vector7 parse_joint_vector(const std::string& text, const std::string& name) {
   const auto v = parse_numbers(text, kNumJoints, name);
-  return Eigen::Map<const Vector7>(v.data());
+  return from_data<Vector7>(v.data());   // parse_numbers checked the count
 }
 
 Vector3 parse_vector3(const std::string& text, const std::string& name) {
   const auto v = parse_numbers(text, 3, name);
-  return Eigen::Map<const Vector3>(v.data());
+  return from_data<Vector3>(v.data());
 }
 
 void ModelArguments::add_to(CLI::App& command) {

@@ -116,7 +116,8 @@ int run_emulate(const EmulateArguments& args) {
   print_percentiles("controller compute time", result.timing.controller_compute_us);
   print_percentiles("wake-up latency after deadline", result.timing.wakeup_latency_us);
   if (scenario.clock == rt::Clock::kRealtime)
-    std::printf("  overruns %llu\n", static_cast<unsigned long long>(result.timing.overruns));
+    std::printf("  overruns %llu, missed deadlines %llu\n", static_cast<unsigned long long>(result.timing.overruns),
+                static_cast<unsigned long long>(result.timing.missed_deadlines));
   if (log) std::printf("  log: %s (%llu rows)\n", log->path().c_str(), static_cast<unsigned long long>(log->rows()));
   if (lcm_log)
     std::printf("  LCM log: %s (%llu events)\n", args.lcm_log.c_str(), static_cast<unsigned long long>(lcm_log->log().events()));

@@ -65,7 +65,13 @@ int run_serve(const ServeArguments& args) {
   if (r.round_trip_us.count > 0)
     std::printf("  round trip state -> command: p50 %.1f  p99 %.1f  max %.1f us (%zu commands)\n", r.round_trip_us.p50,
                 r.round_trip_us.p99, r.round_trip_us.max, r.round_trip_us.count);
-  if (options.clock == rt::Clock::kRealtime) std::printf("  overruns %llu\n", static_cast<unsigned long long>(r.overruns));
+  if (options.clock == rt::Clock::kRealtime) {
+    const rt::Percentiles& w = r.wakeup_latency_us;
+    std::printf("  wake-up latency after deadline: p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f us (%zu cycles)\n", w.p50, w.p99,
+                w.p999, w.max, w.count);
+    std::printf("  overruns %llu, missed deadlines %llu\n", static_cast<unsigned long long>(r.overruns),
+                static_cast<unsigned long long>(r.missed_deadlines));
+  }
   for (const std::string& warning : r.warnings) std::printf("  warning: %s\n", warning.c_str());
   if (!r.last_reflex.empty()) std::printf("  last reflex: %s\n", r.last_reflex.c_str());
   if (!args.log.empty())

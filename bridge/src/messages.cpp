@@ -7,24 +7,37 @@
 #include <limits>
 #include <stdexcept>
 
+#include "csp/dynamics/arrays.hpp"
+
 namespace csp::bridge {
 namespace {
 
-// X(name): every array field of franka::RobotState, the same name in the message.
-#define CSP_STATE_ARRAYS(X)                                                                              \
-  X(O_T_EE) X(O_T_EE_d) X(F_T_EE) X(F_T_NE) X(NE_T_EE) X(EE_T_K) X(I_ee) X(F_x_Cee) X(I_load) X(F_x_Cload) \
-  X(I_total) X(F_x_Ctotal) X(elbow) X(elbow_d) X(elbow_c) X(delbow_c) X(ddelbow_c) X(tau_J) X(tau_J_d)   \
-  X(dtau_J) X(q) X(q_d) X(dq) X(dq_d) X(ddq_d) X(joint_contact) X(cartesian_contact) X(joint_collision)   \
-  X(cartesian_collision) X(tau_ext_hat_filtered) X(O_F_ext_hat_K) X(K_F_ext_hat_K) X(O_dP_EE_d) X(O_ddP_O) \
-  X(O_T_EE_c) X(O_dP_EE_c) X(O_ddP_EE_c) X(theta) X(dtheta)
-// X(name): the double fields, the same name in the message.
-#define CSP_STATE_SCALARS(X) X(m_ee) X(m_load) X(m_total) X(control_command_success_rate)
-
-template <typename From, typename To>
-void copy(const From& from, To& to) {
-  static_assert(std::size(From{}) == std::size(To{}));
-  std::copy(std::begin(from), std::end(from), std::begin(to));
+// A RobotState field and its message field (the same name, csp/rt/robot_state.hpp's list):
+// an std::array and a C array of the same length, or two doubles.
+template <std::size_t N>
+void copy(const std::array<double, N>& from, double (&to)[N]) {
+  std::copy(from.begin(), from.end(), to);
 }
+template <std::size_t N>
+void copy(const double (&from)[N], std::array<double, N>& to) {
+  std::copy(from, from + N, to.begin());
+}
+void copy(double from, double& to) { to = from; }
+
+// The numbers of a message field: a C array or one double.
+template <std::size_t N>
+const double* values_of(const double (&field)[N]) {
+  return field;
+}
+const double* values_of(const double& field) { return &field; }
+template <std::size_t N>
+std::size_t count_of(const double (&)[N]) {
+  return N;
+}
+std::size_t count_of(double) { return 1; }
+
+// The RobotState fields of other types than double: each function below converts them by hand.
+#define CSP_BY_HAND(name)
 
 void errors_to_message(const rt::Errors& errors, int8_t (&out)[rt::kNumErrors]) {
   for (int i = 0; i < rt::kNumErrors; ++i) out[i] = errors.errors()[i] ? 1 : 0;
@@ -55,9 +68,9 @@ Rejection decode_command_as(const void* data, int size, rt::ControlMode mode, Re
   if (rejection != Rejection::kNone) return rejection;
   out.mode = mode;
   out.message_id = message.message_id;
-  if constexpr (std::is_same_v<T, torque_command_t>) out.command.values = Vector7(message.tau_J);
-  if constexpr (std::is_same_v<T, joint_position_command_t>) out.command.values = Vector7(message.q);
-  if constexpr (std::is_same_v<T, joint_velocity_command_t>) out.command.values = Vector7(message.dq);
+  if constexpr (std::is_same_v<T, torque_command_t>) out.command.values = from_array<Vector7>(message.tau_J);
+  if constexpr (std::is_same_v<T, joint_position_command_t>) out.command.values = from_array<Vector7>(message.q);
+  if constexpr (std::is_same_v<T, joint_velocity_command_t>) out.command.values = from_array<Vector7>(message.dq);
   out.command.motion_finished = message.motion_finished != 0;
   return Rejection::kNone;
 }
@@ -73,14 +86,12 @@ std::vector<uint8_t> encode_command_as(int64_t message_id, const rt::Command& co
 
 // A 4x4 column-major pose; throws if it is not a finite rigid transform.
 Transform transform_from(const double (&values)[16], const char* operation) {
-  const Eigen::Map<const Eigen::Matrix4d> m(values);
-  Transform t;
-  t.rotation = m.topLeftCorner<3, 3>();
-  t.translation = m.topRightCorner<3, 1>();
+  const auto m = from_array<Eigen::Matrix4d>(values);
+  const Matrix3 rotation = m.topLeftCorner<3, 3>();
   const bool rigid = m.allFinite() && m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
-                     (t.rotation.transpose() * t.rotation).isApprox(Matrix3::Identity(), 1e-6) && t.rotation.determinant() > 0.0;
+                     (rotation.transpose() * rotation).isApprox(Matrix3::Identity(), 1e-6) && rotation.determinant() > 0.0;
   if (!rigid) throw std::invalid_argument(std::string(operation) + ": expected a rigid transform (4x4 column-major, finite)");
-  return t;
+  return transform_from_matrix(m);
 }
 
 }  // namespace
@@ -105,10 +116,7 @@ robot_state_t to_message(const rt::RobotState& s, int64_t utime, bool command_re
   m.message_id = static_cast<int64_t>(s.time.toMSec());
   m.command_received = command_received ? 1 : 0;
 #define CSP_TO(name) copy(s.name, m.name);
-  CSP_STATE_ARRAYS(CSP_TO)
-#undef CSP_TO
-#define CSP_TO(name) m.name = s.name;
-  CSP_STATE_SCALARS(CSP_TO)
+  CSP_ROBOT_STATE_FIELDS(CSP_TO, CSP_BY_HAND)
 #undef CSP_TO
   errors_to_message(s.current_errors, m.current_errors);
   errors_to_message(s.last_motion_errors, m.last_motion_errors);
@@ -120,10 +128,7 @@ robot_state_t to_message(const rt::RobotState& s, int64_t utime, bool command_re
 rt::RobotState from_message(const robot_state_t& m) {
   rt::RobotState s;
 #define CSP_FROM(name) copy(m.name, s.name);
-  CSP_STATE_ARRAYS(CSP_FROM)
-#undef CSP_FROM
-#define CSP_FROM(name) s.name = m.name;
-  CSP_STATE_SCALARS(CSP_FROM)
+  CSP_ROBOT_STATE_FIELDS(CSP_FROM, CSP_BY_HAND)
 #undef CSP_FROM
   s.current_errors = errors_from_message(m.current_errors);
   s.last_motion_errors = errors_from_message(m.last_motion_errors);
@@ -145,11 +150,8 @@ double state_difference(const robot_state_t& a, const robot_state_t& b, std::str
       difference = std::max(difference, std::isnan(d) || d == 0.0 ? std::numeric_limits<double>::min() : d);
     }
   };
-#define CSP_COMPARE(name) compare(#name, a.name, b.name, std::size(a.name));
-  CSP_STATE_ARRAYS(CSP_COMPARE)
-#undef CSP_COMPARE
-#define CSP_COMPARE(name) compare(#name, &a.name, &b.name, 1);
-  CSP_STATE_SCALARS(CSP_COMPARE)
+#define CSP_COMPARE(name) compare(#name, values_of(a.name), values_of(b.name), count_of(a.name));
+  CSP_ROBOT_STATE_FIELDS(CSP_COMPARE, CSP_BY_HAND)
 #undef CSP_COMPARE
   const auto flag = [&](const char* name, bool same) {
     if (same) return;
@@ -246,14 +248,14 @@ void apply_configuration(const config_request_t& r, rt::Emulator& emulator) {
   switch (r.request) {
     case config_request_t::SET_COLLISION_BEHAVIOR: {
       rt::CollisionBehavior b;
-      b.lower_torque_acceleration = Vector7(r.lower_torque_thresholds_acceleration);
-      b.upper_torque_acceleration = Vector7(r.upper_torque_thresholds_acceleration);
-      b.lower_torque_nominal = Vector7(r.lower_torque_thresholds_nominal);
-      b.upper_torque_nominal = Vector7(r.upper_torque_thresholds_nominal);
-      b.lower_force_acceleration = Vector6(r.lower_force_thresholds_acceleration);
-      b.upper_force_acceleration = Vector6(r.upper_force_thresholds_acceleration);
-      b.lower_force_nominal = Vector6(r.lower_force_thresholds_nominal);
-      b.upper_force_nominal = Vector6(r.upper_force_thresholds_nominal);
+      b.lower_torque_acceleration = from_array<Vector7>(r.lower_torque_thresholds_acceleration);
+      b.upper_torque_acceleration = from_array<Vector7>(r.upper_torque_thresholds_acceleration);
+      b.lower_torque_nominal = from_array<Vector7>(r.lower_torque_thresholds_nominal);
+      b.upper_torque_nominal = from_array<Vector7>(r.upper_torque_thresholds_nominal);
+      b.lower_force_acceleration = from_array<Vector6>(r.lower_force_thresholds_acceleration);
+      b.upper_force_acceleration = from_array<Vector6>(r.upper_force_thresholds_acceleration);
+      b.lower_force_nominal = from_array<Vector6>(r.lower_force_thresholds_nominal);
+      b.upper_force_nominal = from_array<Vector6>(r.upper_force_thresholds_nominal);
       for (const auto* v : {&b.lower_torque_acceleration, &b.upper_torque_acceleration, &b.lower_torque_nominal, &b.upper_torque_nominal})
         if (!v->allFinite() || (v->array() < 0.0).any())
           throw std::invalid_argument("setCollisionBehavior: expected finite non-negative torque thresholds");
@@ -263,12 +265,12 @@ void apply_configuration(const config_request_t& r, rt::Emulator& emulator) {
       emulator.set_collision_behavior(b);
       return;
     }
-    case config_request_t::SET_JOINT_IMPEDANCE: emulator.set_joint_impedance(Vector7(r.K_theta)); return;
+    case config_request_t::SET_JOINT_IMPEDANCE: emulator.set_joint_impedance(from_array<Vector7>(r.K_theta)); return;
     case config_request_t::SET_LOAD: {
       RigidBodyInertia load;
       load.mass = r.load_mass;
-      load.com = Vector3(r.F_x_Cload);
-      load.inertia = Eigen::Map<const Matrix3>(r.load_inertia);   // column-major like I_load
+      load.com = from_array<Vector3>(r.F_x_Cload);
+      load.inertia = from_array<Matrix3>(r.load_inertia);   // column-major like I_load
       emulator.set_load(load);
       return;
     }

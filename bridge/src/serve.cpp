@@ -9,19 +9,16 @@
 
 #include "csp/bridge/lcm_log.hpp"
 #include "csp/bridge/lcm_url.hpp"
+#include "csp/rt/deadline_clock.hpp"
 
 namespace csp::bridge {
 namespace {
 
-constexpr int64_t kCycleNs = 1'000'000;
+using rt::monotonic_ns;
+
+constexpr int64_t kCycleNs = rt::DeadlineClock::kPeriodNs;
 constexpr int64_t kRepublishNs = 10'000'000;   // lockstep: repeat a waiting state for late joiners
 constexpr uint64_t kStatusEvery = 100;         // cycles between status messages
-
-int64_t monotonic_ns() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 // The LCM side of one serve run: publication (and logging), reception into the RobotServer.
 class Bus {
@@ -81,25 +78,35 @@ class Bus {
         publish_state(true);
         next_republish = now + kRepublishNs;
       }
-      const int64_t wait = std::min(deadline_ns, republish ? next_republish : deadline_ns) - now;
-      pollfd fd{lcm_.getFileno(), POLLIN, 0};
-      const timespec timeout{wait / 1'000'000'000, wait % 1'000'000'000};
-      if (ppoll(&fd, 1, &timeout, nullptr) > 0) lcm_.handle();
+      receive_for(std::min(deadline_ns, republish ? next_republish : deadline_ns) - now);
     }
     return done();
   }
 
+  // Real time: handles messages until the clock's deadline, blocking until its spin point and
+  // then polling without blocking, so that the deadline is met as closely as by clock.wait().
+  void receive_until(rt::DeadlineClock& clock) {
+    while (!clock.reached() && !stopped()) receive_for(clock.time_to_spin_ns());
+  }
+
   bool stopped() const { return options_.stop && options_.stop->load(); }
   uint64_t state_messages() const { return state_messages_; }
-  std::vector<double>& round_trip_us() { return round_trip_us_; }
+  const rt::DurationHistogram& round_trip_us() const { return round_trip_us_; }
 
  private:
+  // Handles the messages that arrive within `wait_ns` (0: only those already there).
+  void receive_for(int64_t wait_ns) {
+    pollfd fd{lcm_.getFileno(), POLLIN, 0};
+    const timespec timeout{wait_ns / 1'000'000'000, wait_ns % 1'000'000'000};
+    if (ppoll(&fd, 1, &timeout, nullptr) > 0) lcm_.handle();
+  }
+
   void on_message(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
     // Logged as received, before it is judged: replay judges it again the same way.
     if (log_) log_->write(channel, buffer->data, static_cast<int>(buffer->data_size), buffer->recv_utime);
     server_->receive(channel, buffer->data, static_cast<int>(buffer->data_size), buffer->recv_utime);
     if (server_->answered() && !round_trip_recorded_) {
-      round_trip_us_.push_back(static_cast<double>(monotonic_ns() - published_ns_) * 1e-3);
+      round_trip_us_.add(static_cast<double>(monotonic_ns() - published_ns_) * 1e-3);
       round_trip_recorded_ = true;
     }
   }
@@ -112,7 +119,7 @@ class Bus {
   uint64_t state_messages_ = 0;
   int64_t published_ns_ = 0;
   bool round_trip_recorded_ = false;
-  std::vector<double> round_trip_us_;
+  rt::DurationHistogram round_trip_us_;
 };
 
 status_t status_message(const RobotServer& server, const ServeReport& report, const rt::Percentiles& round_trip) {
@@ -141,6 +148,68 @@ status_t status_message(const RobotServer& server, const ServeReport& report, co
   return s;
 }
 
+// Status every kStatusEvery cycles.
+void publish_periodic_status(Bus& bus, const ServeReport& report) {
+  if (report.cycles % kStatusEvery == 0)
+    bus.publish(bus.channels().status, encode(status_message(bus.server(), report, bus.round_trip_us().percentiles())));
+}
+
+// Real time on the DeadlineClock: at each deadline the robot steps with the command received
+// since the last state (the FCI's rule: in time only if before this deadline) and publishes the
+// new state. A cycle whose step and publication pass the next deadline misses it: the robot runs
+// the missed cycles at once, without a command, so that its time keeps pace with the clock's.
+void run_realtime(Bus& bus, uint64_t cycles, ServeReport& report) {
+  RobotServer& server = bus.server();
+  rt::DeadlineClock clock;
+  const auto robot_cycle = [&] {
+    server.step(now_utime());
+    ++report.cycles;
+    bus.publish_state(false);
+    report.overruns = clock.overruns();
+    report.missed_deadlines = clock.missed_deadlines();
+    publish_periodic_status(bus, report);
+  };
+  bus.publish_state(false);
+  while (report.cycles < cycles && !bus.stopped()) {
+    const int64_t cycle_start = monotonic_ns();
+    bus.receive_until(clock);
+    const bool session_cycle = server.in_session();
+    robot_cycle();
+    for (int64_t missed = clock.end_cycle(); missed > 0 && report.cycles < cycles; --missed) robot_cycle();
+    if (session_cycle) report.motion_wall_seconds += static_cast<double>(monotonic_ns() - cycle_start) * 1e-9;
+  }
+  report.overruns = clock.overruns();
+  report.missed_deadlines = clock.missed_deadlines();
+  report.wakeup_latency_us = clock.wakeup_latency_us().percentiles();
+}
+
+// Lockstep: idle cycles pass at the wall-clock pace (a controller may start a session); a
+// session's cycle waits for its command up to the timeout.
+void run_lockstep(Bus& bus, uint64_t cycles, const ServeOptions& options, ServeReport& report) {
+  RobotServer& server = bus.server();
+  const auto timeout_ns = static_cast<int64_t>(options.lockstep_timeout * 1e9);
+  const auto session_running = [&] { return server.in_session(); };
+  int64_t deadline = monotonic_ns();
+  while (report.cycles < cycles && !bus.stopped()) {
+    const int64_t cycle_start = monotonic_ns();
+    bus.publish_state(false);
+    deadline += kCycleNs;
+    if (report.cycles == 0 && options.wait_for_controller) bus.pump_until(INT64_MAX, true, session_running);
+    else if (!server.in_session()) bus.pump_until(deadline, false, session_running);
+    if (server.in_session()) bus.pump_until(monotonic_ns() + timeout_ns, true, [&] { return server.answered(); });
+    const bool session_cycle = server.in_session();
+    server.step(now_utime());
+    ++report.cycles;
+    const int64_t now = monotonic_ns();
+    if (session_cycle) report.motion_wall_seconds += static_cast<double>(now - cycle_start) * 1e-9;
+    // A session's cycles run as fast as the controller answers; idle cycles after it keep the
+    // wall-clock pace from its end rather than from the schedule it ran ahead of.
+    deadline = session_cycle ? now : std::max(deadline, now);
+    publish_periodic_status(bus, report);
+  }
+  bus.publish_state(false);   // the state the last cycle produced
+}
+
 }  // namespace
 
 ServeReport serve(const rt::Scenario& scenario, const ServeOptions& options) {
@@ -155,47 +224,13 @@ ServeReport serve(const rt::Scenario& scenario, const ServeOptions& options) {
       report.warnings.push_back("no real-time scheduling (" + missing + "): timing will suffer");
   }
   const auto cycles = static_cast<uint64_t>(std::llround(options.duration / rt::kDeltaT));
-  const auto timeout_ns = static_cast<int64_t>(options.lockstep_timeout * 1e9);
-  bus.round_trip_us().reserve(cycles);
   const int64_t start_ns = monotonic_ns();
-  int64_t deadline = start_ns;
-
-  while (report.cycles < cycles && !bus.stopped()) {
-    const int64_t cycle_start = monotonic_ns();
-    bus.publish_state(false);
-    deadline += kCycleNs;
-    if (options.clock == rt::Clock::kRealtime) {
-      // Commands count only if they arrive before the next deadline (the FCI's rule).
-      bus.pump_until(deadline, false, [] { return false; });
-    } else {
-      // Lockstep: idle cycles pass at the wall-clock pace (a controller may start a session);
-      // a session's cycle waits for its command up to the timeout.
-      const auto session_running = [&] { return server.in_session(); };
-      if (report.cycles == 0 && options.wait_for_controller) bus.pump_until(INT64_MAX, true, session_running);
-      else if (!server.in_session()) bus.pump_until(deadline, false, session_running);
-      if (server.in_session()) bus.pump_until(monotonic_ns() + timeout_ns, true, [&] { return server.answered(); });
-    }
-    const bool session_cycle = server.in_session();
-    server.step(now_utime());
-    ++report.cycles;
-    const int64_t now = monotonic_ns();
-    if (session_cycle) report.motion_wall_seconds += static_cast<double>(now - cycle_start) * 1e-9;
-    if (options.clock == rt::Clock::kRealtime && now > deadline + kCycleNs) {
-      ++report.overruns;
-      deadline = now;   // late: the next cycle starts now instead of catching up
-    } else if (options.clock == rt::Clock::kLockstep) {
-      // A session's cycles run as fast as the controller answers; idle cycles after it keep the
-      // wall-clock pace from its end rather than from the schedule it ran ahead of.
-      deadline = session_cycle ? now : std::max(deadline, now);
-    }
-    if (report.cycles % kStatusEvery == 0)
-      bus.publish(bus.channels().status, encode(status_message(server, report, rt::percentiles(bus.round_trip_us()))));
-  }
-  bus.publish_state(false);   // the state the last cycle produced
+  if (options.clock == rt::Clock::kRealtime) run_realtime(bus, cycles, report);
+  else run_lockstep(bus, cycles, options, report);
 
   report.counters = server.counters();
   report.emulator = server.emulator().counters();
-  report.round_trip_us = rt::percentiles(bus.round_trip_us());
+  report.round_trip_us = bus.round_trip_us().percentiles();
   report.wall_seconds = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
   report.last_reflex = server.emulator().reflex_reason();
   bus.publish(bus.channels().status, encode(status_message(server, report, report.round_trip_us)));

@@ -3,39 +3,15 @@
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
-#include <time.h>
 
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <exception>
 
+#include "csp/rt/deadline_clock.hpp"
+
 namespace csp::rt {
 namespace {
-
-constexpr int64_t kCycleNs = 1'000'000;
-
-int64_t monotonic_ns() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
-
-// Sleeps until shortly before the deadline, then spins to it: waking from a sleep costs tens of
-// microseconds on a kernel without PREEMPT_RT, the last stretch of a 1 ms cycle should not.
-constexpr int64_t kSpinNs = 100'000;
-
-void sleep_until_ns(int64_t deadline) {
-  const int64_t wake = deadline - kSpinNs;
-  timespec t{};
-  t.tv_sec = wake / 1'000'000'000;
-  t.tv_nsec = wake % 1'000'000'000;
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
-  }
-  while (monotonic_ns() < deadline) {
-  }
-}
 
 // One motion's bookkeeping shared by both clocks.
 class MotionRunner {
@@ -49,7 +25,7 @@ class MotionRunner {
     const int64_t start = monotonic_ns();
     try {
       Command command = controller_(emulator_.state(), period);
-      compute_us_.push_back(static_cast<double>(monotonic_ns() - start) * 1e-3);
+      compute_us_.add(static_cast<double>(monotonic_ns() - start) * 1e-3);
       return command;
     } catch (const std::exception& e) {
       fail("the controller threw: " + std::string(e.what()));
@@ -87,14 +63,12 @@ class MotionRunner {
     result.reflex = emulator_.state().robot_mode == RobotMode::kReflex;
     result.errors = emulator_.state().last_motion_errors;
     result.reason = emulator_.reflex_reason();
-    report_.controller_compute_us = percentiles(compute_us_);
-    report_.wakeup_latency_us = percentiles(latency_us_);
+    report_.controller_compute_us = compute_us_.percentiles();
     result.timing = report_;
     return result;
   }
 
   TimingReport& report() { return report_; }
-  std::vector<double>& latency_us() { return latency_us_; }
 
  private:
   [[noreturn]] void fail(const std::string& reason) {
@@ -110,7 +84,7 @@ class MotionRunner {
   const LoopOptions& options_;
   CommandChannel channel_;
   TimingReport report_;
-  std::vector<double> compute_us_, latency_us_;
+  DurationHistogram compute_us_;
 };
 
 MotionResult run_lockstep(MotionRunner& runner) {
@@ -136,30 +110,27 @@ std::optional<std::string> require_realtime(RealtimeConfig config) {
   return text + ": running without, timing will suffer";
 }
 
-MotionResult run_realtime(MotionRunner& runner, const LoopOptions& options) {
-  runner.latency_us().reserve(options.max_duration ? static_cast<std::size_t>(*options.max_duration * 1000) + 16 : 60000);
-
-  int64_t deadline = monotonic_ns();
+MotionResult run_realtime(MotionRunner& runner) {
+  DeadlineClock clock;
   Duration period(0);
   while (true) {
-    deadline += kCycleNs;
-    sleep_until_ns(deadline);
-    runner.latency_us().push_back(static_cast<double>(monotonic_ns() - deadline) * 1e-3);
-
+    clock.wait();
     Command command = runner.call_controller(period);
     runner.close_at_max_duration(command);
-    // The command counts only if it is back before the next cycle begins (the FCI's rule).
-    const int64_t late_cycles = (monotonic_ns() - deadline) / kCycleNs;
-    if (late_cycles == 0) {
-      runner.step(command, runner.network_delivers());
-    } else {
-      ++runner.report().overruns;
-      for (int64_t k = 0; k < late_cycles && !runner.done(); ++k) runner.step(command, false);
-      deadline += late_cycles * kCycleNs;   // those deadlines have passed
-    }
-    period = Duration(static_cast<uint64_t>(1 + late_cycles));
+    // The command counts only if it is back before the next cycle begins (the FCI's rule). Late
+    // by `missed` deadlines, it is lost, and so are the cycles that passed meanwhile and the one the
+    // clock skips to stay on the grid: 1 + missed robot cycles in all, the period the controller is
+    // told next (libfranka's period is the robot time between two calls).
+    const int64_t missed = clock.end_cycle();
+    runner.step(command, missed == 0 && runner.network_delivers());
+    for (int64_t k = 0; k < missed && !runner.done(); ++k) runner.step(command, false);
+    period = Duration(static_cast<uint64_t>(1 + missed));
     if (runner.done()) break;
   }
+  TimingReport& report = runner.report();
+  report.overruns = clock.overruns();
+  report.missed_deadlines = clock.missed_deadlines();
+  report.wakeup_latency_us = clock.wakeup_latency_us().percentiles();
   return runner.finish();
 }
 
@@ -179,22 +150,6 @@ bool CommandChannel::delivers(uint64_t cycle) {
   return latency_us <= faults_.budget_us;
 }
 
-Percentiles percentiles(std::vector<double> samples) {
-  Percentiles p;
-  p.count = samples.size();
-  if (samples.empty()) return p;
-  std::sort(samples.begin(), samples.end());
-  const auto at = [&](double fraction) {
-    const auto index = static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(samples.size()))) - 1;
-    return samples[std::min(index, samples.size() - 1)];
-  };
-  p.p50 = at(0.5);
-  p.p99 = at(0.99);
-  p.p999 = at(0.999);
-  p.max = samples.back();
-  return p;
-}
-
 std::vector<std::string> enable_realtime_scheduling() {
   std::vector<std::string> missing;
   if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) missing.push_back(std::string("mlockall: ") + std::strerror(errno));
@@ -212,7 +167,7 @@ MotionResult run_motion(Emulator& emulator, ControlMode mode, const Controller& 
   emulator.start_motion(mode);
   MotionRunner runner(emulator, controller, options);
   if (warning) runner.report().warnings.push_back(*warning);
-  return options.clock == Clock::kLockstep ? run_lockstep(runner) : run_realtime(runner, options);
+  return options.clock == Clock::kLockstep ? run_lockstep(runner) : run_realtime(runner);
 }
 
 }  // namespace csp::rt

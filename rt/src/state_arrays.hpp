@@ -1,19 +1,12 @@
-// Eigen values into RobotState's std::arrays (libfranka's layout: column-major matrices).
+// Eigen values into RobotState's std::arrays: assign() from csp/dynamics/arrays.hpp, and the
+// three fields (mass, CoM, inertia) RobotState keeps for each body on the flange.
 #pragma once
 
 #include <array>
 
-#include "csp/dynamics/model.hpp"
+#include "csp/dynamics/arrays.hpp"
 
 namespace csp::rt {
-
-template <std::size_t N, typename Derived>
-void assign(std::array<double, N>& out, const Eigen::MatrixBase<Derived>& value) {
-  static_assert(Derived::SizeAtCompileTime == static_cast<int>(N));
-  Eigen::Map<Eigen::Matrix<double, Derived::RowsAtCompileTime, Derived::ColsAtCompileTime>>(out.data()) = value;
-}
-
-inline void assign(std::array<double, 16>& out, const Transform& pose) { assign(out, pose.matrix()); }
 
 inline void assign_inertia(const RigidBodyInertia& body, double& mass, std::array<double, 3>& com,
                            std::array<double, 9>& inertia) {

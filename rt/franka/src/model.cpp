@@ -1,28 +1,13 @@
 #include "franka/model.h"
 
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/arrays.hpp"
 
 namespace franka {
 namespace {
 
-csp::Vector7 vector7(const std::array<double, 7>& a) { return csp::Vector7(a.data()); }
-
-csp::Transform transform(const std::array<double, 16>& column_major) {
-  const Eigen::Map<const Eigen::Matrix4d> m(column_major.data());
-  csp::Transform t;
-  t.rotation = m.topLeftCorner<3, 3>();
-  t.translation = m.topRightCorner<3, 1>();
-  return t;
-}
-
-template <std::size_t N, typename Derived>
-std::array<double, N> column_major(const Eigen::MatrixBase<Derived>& matrix) {
-  std::array<double, N> out{};
-  Eigen::Map<Eigen::Matrix<double, Derived::RowsAtCompileTime, Derived::ColsAtCompileTime>>(out.data()) = matrix;
-  return out;
-}
-
-std::array<double, 7> array7(const csp::Vector7& v) { return column_major<7>(v); }
+using csp::from_array;
+using csp::to_array;
 
 }  // namespace
 
@@ -35,12 +20,12 @@ Frame operator++(Frame& frame, int /* dummy */) noexcept {
 Model::Model(const csp::Model& robot_model) : parameters_(robot_model.parameters()), model_(robot_model) {
   const csp::ModelParameters& p = robot_model.parameters();
   const csp::RigidBodyInertia& total = robot_model.total_flange_load();
-  configuration_.F_T_EE = column_major<16>(p.F_T_EE.matrix());
-  configuration_.EE_T_K = column_major<16>(p.EE_T_K.matrix());
+  configuration_.F_T_EE = to_array(p.F_T_EE);
+  configuration_.EE_T_K = to_array(p.EE_T_K);
   configuration_.m_total = total.mass;
-  configuration_.F_x_Ctotal = column_major<3>(total.com);
-  configuration_.I_total = column_major<9>(total.inertia);
-  configuration_.gravity_earth = column_major<3>(p.gravity);
+  configuration_.F_x_Ctotal = to_array(total.com);
+  configuration_.I_total = to_array(total.inertia);
+  configuration_.gravity_earth = to_array(p.gravity);
   // The flange carries one body per call (libfranka's total load): end effector and load merged.
   parameters_.end_effector = {};
   parameters_.load = total;
@@ -75,28 +60,28 @@ Model::Configuration Model::with_load(double m_total, const std::array<double, 3
 const csp::Model& Model::configured(const Configuration& configuration, const std::array<double, 7>& q) const {
   if (!(configuration == configuration_)) {
     csp::ModelParameters p = parameters_;
-    p.F_T_EE = transform(configuration.F_T_EE);
-    p.EE_T_K = transform(configuration.EE_T_K);
+    p.F_T_EE = csp::transform_from_array(configuration.F_T_EE);
+    p.EE_T_K = csp::transform_from_array(configuration.EE_T_K);
     p.load.mass = configuration.m_total;
-    p.load.com = csp::Vector3(configuration.F_x_Ctotal.data());
-    p.load.inertia = Eigen::Map<const csp::Matrix3>(configuration.I_total.data());
-    p.gravity = csp::Vector3(configuration.gravity_earth.data());
+    p.load.com = from_array<csp::Vector3>(configuration.F_x_Ctotal);
+    p.load.inertia = from_array<csp::Matrix3>(configuration.I_total);
+    p.gravity = from_array<csp::Vector3>(configuration.gravity_earth);
     model_ = csp::Model(p);   // throws std::invalid_argument for an invalid load
     configuration_ = configuration;
   }
-  csp::forward_kinematics(model_, data_, vector7(q));
+  csp::forward_kinematics(model_, data_, from_array<csp::Vector7>(q));
   return model_;
 }
 
 std::array<double, 16> Model::pose(Frame frame, const RobotState& robot_state) const {
   configured(of_state(robot_state), robot_state.q);
-  return column_major<16>(csp::frame_pose(data_, static_cast<csp::Frame>(frame)).matrix());
+  return to_array(csp::frame_pose(data_, static_cast<csp::Frame>(frame)));
 }
 
 std::array<double, 16> Model::pose(Frame frame, const std::array<double, 7>& q, const std::array<double, 16>& F_T_EE,
                                    const std::array<double, 16>& EE_T_K) const {
   configured(with_frames(F_T_EE, EE_T_K), q);
-  return column_major<16>(csp::frame_pose(data_, static_cast<csp::Frame>(frame)).matrix());
+  return to_array(csp::frame_pose(data_, static_cast<csp::Frame>(frame)));
 }
 
 std::array<double, 42> Model::jacobian(Frame frame, bool body, const Configuration& configuration,
@@ -105,7 +90,7 @@ std::array<double, 42> Model::jacobian(Frame frame, bool body, const Configurati
   csp::Matrix6x7 J;
   if (body) csp::body_jacobian(data_, static_cast<csp::Frame>(frame), J);
   else csp::zero_jacobian(data_, static_cast<csp::Frame>(frame), J);
-  return column_major<42>(J);
+  return to_array(J);
 }
 
 std::array<double, 42> Model::bodyJacobian(Frame frame, const RobotState& robot_state) const {
@@ -134,8 +119,8 @@ std::array<double, 49> Model::mass(const RobotState& robot_state) const {
 
 std::array<double, 49> Model::mass(const std::array<double, 7>& q, const std::array<double, 9>& I_total, double m_total,
                                    const std::array<double, 3>& F_x_Ctotal) const {
-  csp::crba(configured(with_load(m_total, F_x_Ctotal, I_total), q), data_, vector7(q));
-  return column_major<49>(data_.mass_matrix);
+  csp::crba(configured(with_load(m_total, F_x_Ctotal, I_total), q), data_, from_array<csp::Vector7>(q));
+  return to_array(data_.mass_matrix);
 }
 
 std::array<double, 7> Model::coriolis(const RobotState& robot_state) const {
@@ -146,8 +131,8 @@ std::array<double, 7> Model::coriolis(const std::array<double, 7>& q, const std:
                                       const std::array<double, 9>& I_total, double m_total,
                                       const std::array<double, 3>& F_x_Ctotal) const {
   csp::Vector7 c;
-  csp::coriolis_torque(configured(with_load(m_total, F_x_Ctotal, I_total), q), data_, vector7(q), vector7(dq), c);
-  return array7(c);
+  csp::coriolis_torque(configured(with_load(m_total, F_x_Ctotal, I_total), q), data_, from_array<csp::Vector7>(q), from_array<csp::Vector7>(dq), c);
+  return to_array(c);
 }
 
 std::array<double, 7> Model::gravity(const std::array<double, 7>& q, double m_total,
@@ -158,8 +143,8 @@ std::array<double, 7> Model::gravity(const std::array<double, 7>& q, double m_to
   Configuration c = with_load(m_total, F_x_Ctotal, configuration_.I_total);
   c.gravity_earth = gravity_earth;
   csp::Vector7 g;
-  csp::gravity_torque(configured(c, q), data_, vector7(q), g);
-  return array7(g);
+  csp::gravity_torque(configured(c, q), data_, from_array<csp::Vector7>(q), g);
+  return to_array(g);
 }
 
 std::array<double, 7> Model::gravity(const RobotState& robot_state, const std::array<double, 3>& gravity_earth) const {

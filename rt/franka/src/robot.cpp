@@ -4,20 +4,15 @@
 #include <cmath>
 #include <thread>
 
+#include "csp/dynamics/arrays.hpp"
 #include "franka/rate_limiting.h"
 
 namespace franka {
 namespace {
 
+using csp::from_array;
+using csp::to_array;
 using csp::rt::ControlMode;
-
-csp::Vector7 vector7(const std::array<double, 7>& a) { return csp::Vector7(a.data()); }
-
-std::array<double, 7> array7(const csp::Vector7& v) {
-  std::array<double, 7> out{};
-  csp::Vector7::Map(out.data()) = v;
-  return out;
-}
 
 std::array<double, 7>& values_of(Torques& command) { return command.tau_J; }
 std::array<double, 7>& values_of(JointPositions& command) { return command.q; }
@@ -45,11 +40,6 @@ void configure(Call call) {
   } catch (const csp::rt::InvalidOperation& e) {
     throw InvalidOperationException(std::string("libfranka: ") + e.what());
   }
-}
-
-csp::Transform transform(const std::array<double, 16>& column_major) {
-  const Eigen::Map<const Eigen::Matrix4d> m(column_major.data());
-  return {m.topLeftCorner<3, 3>(), m.topRightCorner<3, 1>()};
 }
 
 }  // namespace
@@ -101,7 +91,7 @@ void Robot::run(ControlMode mode, const std::function<Command(const RobotState&,
       throw CommandException("libfranka: Commanding value is infinite or NaN.");
     }
     values = shape(mode, values, state, limit_rate, cutoff_frequency);
-    return csp::rt::Command{vector7(values), command.motion_finished};
+    return csp::rt::Command{from_array<csp::Vector7>(values), command.motion_finished};
   };
   log_count_ = 0;
   csp::rt::MotionResult result;
@@ -129,10 +119,10 @@ std::array<double, 7> Robot::shape(ControlMode mode, std::array<double, 7> value
   // The emulated arm's limits, kept kLimitEps inside so that round-off does not trip them.
   const csp::JointLimits& limits = emulator_.plant_model().parameters().joint_limits;
   const csp::Vector7 eps = csp::Vector7::Constant(kLimitEps);
-  if (mode == ControlMode::kTorque) return limitRate(array7(limits.dtau_max - eps), values, last);
-  const csp::Vector7 q_d = vector7(state.q_d);
-  const std::array<double, 7> upper = array7(limits.dq_upper(q_d) - eps), lower = array7(limits.dq_lower(q_d) + eps);
-  const std::array<double, 7> acceleration = array7(limits.ddq_max - eps), jerk = array7(limits.dddq_max - eps);
+  if (mode == ControlMode::kTorque) return limitRate(to_array(limits.dtau_max - eps), values, last);
+  const csp::Vector7 q_d = from_array<csp::Vector7>(state.q_d);
+  const std::array<double, 7> upper = to_array(limits.dq_upper(q_d) - eps), lower = to_array(limits.dq_lower(q_d) + eps);
+  const std::array<double, 7> acceleration = to_array(limits.ddq_max - eps), jerk = to_array(limits.dddq_max - eps);
   if (mode == ControlMode::kJointPosition)
     return limitRate(upper, lower, acceleration, jerk, values, state.q_d, state.dq_d, state.ddq_d);
   return limitRate(upper, lower, acceleration, jerk, values, state.dq_d, state.ddq_d);
@@ -141,7 +131,7 @@ std::array<double, 7> Robot::shape(ControlMode mode, std::array<double, 7> value
 void Robot::record(const RobotState& state, const csp::rt::CycleInfo& cycle) {
   Record& r = log_[log_next_];
   r.state = state;
-  r.command = array7(cycle.command.values);
+  r.command = to_array(cycle.command.values);
   r.command_received = cycle.command_received;
   log_next_ = (log_next_ + 1) % kLogSize;
   log_count_ = std::min(log_count_ + 1, kLogSize);
@@ -187,37 +177,36 @@ void Robot::setCollisionBehavior(const std::array<double, 7>& lower_torque_thres
                                  const std::array<double, 6>& upper_force_thresholds_acceleration,
                                  const std::array<double, 6>& lower_force_thresholds_nominal,
                                  const std::array<double, 6>& upper_force_thresholds_nominal) {
-  using Vector6Map = Eigen::Map<const csp::Vector6>;
   csp::rt::CollisionBehavior b;
-  b.lower_torque_acceleration = vector7(lower_torque_thresholds_acceleration);
-  b.upper_torque_acceleration = vector7(upper_torque_thresholds_acceleration);
-  b.lower_torque_nominal = vector7(lower_torque_thresholds_nominal);
-  b.upper_torque_nominal = vector7(upper_torque_thresholds_nominal);
-  b.lower_force_acceleration = Vector6Map(lower_force_thresholds_acceleration.data());
-  b.upper_force_acceleration = Vector6Map(upper_force_thresholds_acceleration.data());
-  b.lower_force_nominal = Vector6Map(lower_force_thresholds_nominal.data());
-  b.upper_force_nominal = Vector6Map(upper_force_thresholds_nominal.data());
+  b.lower_torque_acceleration = from_array<csp::Vector7>(lower_torque_thresholds_acceleration);
+  b.upper_torque_acceleration = from_array<csp::Vector7>(upper_torque_thresholds_acceleration);
+  b.lower_torque_nominal = from_array<csp::Vector7>(lower_torque_thresholds_nominal);
+  b.upper_torque_nominal = from_array<csp::Vector7>(upper_torque_thresholds_nominal);
+  b.lower_force_acceleration = from_array<csp::Vector6>(lower_force_thresholds_acceleration);
+  b.upper_force_acceleration = from_array<csp::Vector6>(upper_force_thresholds_acceleration);
+  b.lower_force_nominal = from_array<csp::Vector6>(lower_force_thresholds_nominal);
+  b.upper_force_nominal = from_array<csp::Vector6>(upper_force_thresholds_nominal);
   configure([&] { emulator_.set_collision_behavior(b); });
 }
 
 void Robot::setJointImpedance(const std::array<double, 7>& K_theta) {
-  configure([&] { emulator_.set_joint_impedance(vector7(K_theta)); });
+  configure([&] { emulator_.set_joint_impedance(from_array<csp::Vector7>(K_theta)); });
 }
 
 void Robot::setLoad(double load_mass, const std::array<double, 3>& F_x_Cload, const std::array<double, 9>& load_inertia) {
   csp::RigidBodyInertia load;
   load.mass = load_mass;
   load.com = csp::Vector3(F_x_Cload.data());
-  load.inertia = Eigen::Map<const csp::Matrix3>(load_inertia.data());
+  load.inertia = from_array<csp::Matrix3>(load_inertia);
   configure([&] { emulator_.set_load(load); });
 }
 
 void Robot::setEE(const std::array<double, 16>& NE_T_EE) {
-  configure([&] { emulator_.set_EE(transform(NE_T_EE)); });
+  configure([&] { emulator_.set_EE(csp::transform_from_array(NE_T_EE)); });
 }
 
 void Robot::setK(const std::array<double, 16>& EE_T_K) {
-  configure([&] { emulator_.set_K(transform(EE_T_K)); });
+  configure([&] { emulator_.set_K(csp::transform_from_array(EE_T_K)); });
 }
 
 void Robot::automaticErrorRecovery() {

@@ -28,7 +28,9 @@ struct ServeReport {
   ServerCounters counters;
   rt::EmulatorCounters emulator;
   rt::Percentiles round_trip_us;        // state publication -> its command received
-  uint64_t overruns = 0;                // real time: cycles that ended after their deadline
+  uint64_t overruns = 0;                // real time: cycles whose step and publication passed the next deadline
+  uint64_t missed_deadlines = 0;        // real time: deadlines those cycles skipped (rt::DeadlineClock's rule)
+  rt::Percentiles wakeup_latency_us;    // real time: robot step after its deadline
   double wall_seconds = 0.0;
   double motion_wall_seconds = 0.0;     // of the cycles inside control sessions (lockstep: the controller's pace)
   uint64_t state_messages = 0;          // published (republications while waiting not counted)

@@ -1,6 +1,6 @@
 // Running a motion on the emulator with a controller in the same process, on one of two clocks:
-// lockstep (simulated time, 1 ms per cycle, bit-reproducible) or real time (absolute 1 kHz
-// deadlines on CLOCK_MONOTONIC). Commands pass a seeded network model that can lose them.
+// lockstep (simulated time, 1 ms per cycle, bit-reproducible) or real time (the DeadlineClock's
+// absolute 1 kHz deadlines). Commands pass a seeded network model that can lose them.
 #pragma once
 
 #include <cstdint>
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "csp/rt/emulator.hpp"
+#include "csp/rt/statistics.hpp"
 
 namespace csp::rt {
 
@@ -54,17 +55,11 @@ class CommandChannel {
   std::normal_distribution<double> normal_{0.0, 1.0};
 };
 
-// p50 / p99 / p99.9 / max of a sample [us].
-struct Percentiles {
-  double p50 = 0.0, p99 = 0.0, p999 = 0.0, max = 0.0;
-  std::size_t count = 0;
-};
-Percentiles percentiles(std::vector<double> samples);
-
 struct TimingReport {
   uint64_t cycles = 0;
   uint64_t lost_commands = 0;         // not received in their cycle (faults, overruns)
-  uint64_t overruns = 0;              // real time: controller + cycle finished after the deadline
+  uint64_t overruns = 0;              // real time: cycles whose controller call ended after the next deadline
+  uint64_t missed_deadlines = 0;      // real time: deadlines those cycles skipped (DeadlineClock's rule)
   Percentiles controller_compute_us;  // wall time of the control callback
   Percentiles wakeup_latency_us;      // real time: wake-up after the absolute deadline
   std::vector<std::string> warnings;  // e.g. no real-time scheduling (kIgnore)
