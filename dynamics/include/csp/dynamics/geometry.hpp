@@ -1,10 +1,11 @@
 // Collision geometry: convex primitives, their signed distances with closest points, and the
 // Franka arm's published collision capsules placed by forward kinematics. Pure math, no allocation.
 //
-// Signed distance: the Euclidean distance between the two solids when they are apart (> 0);
-// when they overlap, a negative number whose magnitude is the penetration along the reported
-// direction (exact for every pair with a capsule or sphere, see capsule-box below). The closest
-// points lie on the two surfaces, so |on_a - on_b| equals |distance|.
+// Signed distance: the Euclidean distance between the two solids when they are apart (> 0), with
+// closest points on the two surfaces. When they overlap, a negative number: minus the penetration
+// depth along the reported direction, exact while the cores (segment, centre) are apart; when a
+// capsule's segment itself enters a box, the deepest segment point's depth plus the radius. In
+// every case |on_a - on_b| equals |distance|. Validity only needs the sign and the positive values.
 #pragma once
 
 #include <array>

@@ -36,10 +36,11 @@ class ClearanceChecker {
   StateClearance check_all_pairs(const Vector7& q);
 
   // True only if no state on the straight joint-space segment q_a -> q_b is in collision
-  // (conservative advancement, Schwarzer, Saha & Latombe 2005): a point on link k moves by at most
-  // sum_{j<=k} R_jk |dq_j| along the segment (R_jk from reach_from_joint), so if the midpoint's
-  // clearance of every pair exceeds the motion bound of both its capsules over half the segment,
-  // the whole segment is free; otherwise bisect, up to `max_depth` halvings (then: not certified).
+  // (conservative advancement, Schwarzer, Saha & Latombe 2005). Along the segment a point of link k
+  // moves by at most sum_{j<=k} R_jk |dq_j| (R_jk from reach_from_joint); for a self pair (i, k),
+  // i < k, the distance changes only through joints i+1..k. So if at the midpoint every pair's
+  // clearance exceeds its bound over half the segment, the whole segment is free; otherwise bisect,
+  // up to `max_depth` halvings (then: not certified).
   bool motion_is_free(const Vector7& q_a, const Vector7& q_b, int max_depth = 16);
 
   int num_pairs() const { return static_cast<int>(pairs_.size()); }
@@ -52,7 +53,6 @@ class ClearanceChecker {
     std::string name;
     CapsuleFrame frame;
     Capsule local;
-    Vector7 reach;   // R_j: bound on the distance of the capsule's points from joint j's axis
   };
   struct Static {
     std::string name;
@@ -66,12 +66,13 @@ class ClearanceChecker {
     int other;         // index into statics_, or into moving_ when self
     bool self;
     double required;   // clearance of the class
+    Vector7 reach;     // per joint: how far a joint step can change the distance (0 for joints that cannot)
   };
 
   void place(const Vector7& q);
   Distance pair_distance(const Pair& pair) const;
-  // Minimum over pairs of distance - required - (motion bound of each side); motion = 0 for a state.
-  StateClearance evaluate(const std::vector<double>& motion, bool broad_phase);
+  // Minimum over pairs of distance - required - reach . joint_step (joint_step = 0 for a state).
+  StateClearance evaluate(const Vector7& joint_step, bool broad_phase);
 
   Model model_;
   Data data_;
@@ -80,7 +81,6 @@ class ClearanceChecker {
   std::vector<Pair> pairs_;
   std::vector<Capsule> placed_;
   std::vector<Aabb> placed_boxes_;
-  std::vector<double> no_motion_, motion_;
 };
 
 }  // namespace csp::planners
