@@ -492,6 +492,7 @@ TEST(Scenes, DetectsObstacleAndSelfCollisions) {
   const Vector7 folded = (Vector7() << 0.0, -1.7, 0.0, -3.0, 0.0, 0.2, 0.0).finished();
   const auto s = checker.check(folded);
   EXPECT_LT(s.clearance, 0.0);
+  EXPECT_EQ(s.obstacle_class, "self") << s.moving << " vs " << s.other;
 }
 
 // Writes `text` as a scene file and returns the error message of loading it.
