@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <type_traits>
 
 #include "csp/dynamics/algorithms.hpp"
 
@@ -37,7 +38,7 @@ ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene) : mod
       r[j - 1] = reach_from_joint(model_, j, moving_[moving].frame, moving_[moving].local);
     return r;
   };
-  for (int m = 0; m < num_moving(); ++m) {
+  for (int m = 0; m < static_cast<int>(moving_.size()); ++m) {
     for (int s = 0; s < static_cast<int>(statics_.size()); ++s) {
       const auto& exempt = scene.obstacles[s].exempt;
       if (std::find(exempt.begin(), exempt.end(), moving_[m].name) != exempt.end()) continue;
@@ -49,7 +50,7 @@ ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene) : mod
     pairs_.push_back({distal, proximal, true, self, reach(distal, static_cast<int>(moving_[proximal].frame))});
   };
   for (const auto& [a, b] : franka_arm_self_pairs()) add_self(b, a);
-  for (int m = kNumArmCapsules; m < num_moving(); ++m)
+  for (int m = kNumArmCapsules; m < static_cast<int>(moving_.size()); ++m)
     for (int a = 0; a < kToolCheckedArmCapsules; ++a) add_self(m, a);
 
   placed_.resize(moving_.size());

@@ -16,6 +16,7 @@ namespace csp::planners {
 struct StateClearance {
   double clearance = 0.0;
   double distance = 0.0;
+  // Names valid while the checker lives.
   std::string_view moving;          // arm or tool capsule
   std::string_view other;           // obstacle or (self pairs) arm capsule
   std::string_view obstacle_class;  // "self" for arm/tool pairs
@@ -24,7 +25,8 @@ struct StateClearance {
 
 class ClearanceChecker {
  public:
-  // The scene's tool replaces the hand: capsules on the flange frame. Keeps references to neither.
+  // A scene as load_scene validates it; its tool replaces the hand (capsules on the flange frame).
+  // Keeps references to neither argument.
   ClearanceChecker(const Model& model, const Scene& scene);
 
   // Forward kinematics, then every pair whose broad-phase bound (bounding boxes) could beat the
@@ -44,9 +46,6 @@ class ClearanceChecker {
   bool motion_is_free(const Vector7& q_a, const Vector7& q_b, int max_depth = 16);
 
   int num_pairs() const { return static_cast<int>(pairs_.size()); }
-  int num_moving() const { return static_cast<int>(moving_.size()); }
-  // The base-frame capsules after the last check (arm capsules first, then the tool's).
-  const std::vector<Capsule>& placed_capsules() const { return placed_; }
 
  private:
   struct Moving {
@@ -79,7 +78,7 @@ class ClearanceChecker {
   std::vector<Moving> moving_;
   std::vector<Static> statics_;
   std::vector<Pair> pairs_;
-  std::vector<Capsule> placed_;
+  std::vector<Capsule> placed_;     // base frame, after place(): arm capsules, then the tool's
   std::vector<Aabb> placed_boxes_;
 };
 
