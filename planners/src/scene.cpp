@@ -1,0 +1,224 @@
+#include "csp/planners/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <set>
+
+#include "csp/io/yaml_field.hpp"
+
+namespace csp::planners {
+namespace {
+
+// Every block that carries numbers names where they come from (or says `assumption: ...`).
+void require_source(const Field& field) {
+  if (field["source"].text().empty()) field["source"].fail("a non-empty source (a citation or `assumption: ...`)");
+}
+
+double positive(const Field& field) {
+  const double value = field.number();
+  if (value <= 0.0) field.fail("a positive number");
+  return value;
+}
+
+double non_negative(const Field& field) {
+  const double value = field.number();
+  if (value < 0.0) field.fail("a non-negative number");
+  return value;
+}
+
+Vector3 unit_vector(const Field& field) {
+  const Vector3 v = field.vector<3>();
+  if (std::abs(v.norm() - 1.0) > 1e-6) field.fail("a unit vector (norm 1 within 1e-6)");
+  return v;
+}
+
+Matrix3 rotation_rpy(const Vector3& rpy) {   // URDF convention: R = Rz(yaw) Ry(pitch) Rx(roll)
+  return (Eigen::AngleAxisd(rpy[2], Vector3::UnitZ()) * Eigen::AngleAxisd(rpy[1], Vector3::UnitY()) *
+          Eigen::AngleAxisd(rpy[0], Vector3::UnitX()))
+      .toRotationMatrix();
+}
+
+Box box(const Field& f) {
+  Box b;
+  if (f.has("min") || f.has("max")) {   // axis-aligned, by its corners
+    f.allow_only({"min", "max"});
+    const Vector3 lo = f["min"].vector<3>(), hi = f["max"].vector<3>();
+    if ((hi.array() <= lo.array()).any()) f["max"].fail("max > min on every axis");
+    b.pose.translation = 0.5 * (lo + hi);
+    b.half_size = 0.5 * (hi - lo);
+    return b;
+  }
+  f.allow_only({"center", "size", "rpy"});
+  b.pose.translation = f["center"].vector<3>();
+  const Vector3 size = f["size"].vector<3>();
+  if ((size.array() <= 0.0).any()) f["size"].fail("3 positive edge lengths");
+  b.half_size = 0.5 * size;
+  if (f.has("rpy")) b.pose.rotation = rotation_rpy(f["rpy"].vector<3>());
+  return b;
+}
+
+Capsule capsule(const Field& f, std::initializer_list<const char*> keys) {
+  f.allow_only(keys);
+  return {f["a"].vector<3>(), f["b"].vector<3>(), positive(f["radius"])};
+}
+
+Shape shape(const Field& obstacle) {
+  int kinds = 0;
+  for (const char* kind : {"box", "capsule", "sphere", "half_space"}) kinds += obstacle.has(kind) ? 1 : 0;
+  if (kinds != 1) obstacle.fail("exactly one shape: box, capsule, sphere or half_space");
+  if (obstacle.has("box")) return box(obstacle["box"]);
+  if (obstacle.has("capsule")) return capsule(obstacle["capsule"], {"a", "b", "radius"});
+  if (obstacle.has("sphere")) {
+    const Field s = obstacle["sphere"];
+    s.allow_only({"center", "radius"});
+    return Sphere{s["center"].vector<3>(), positive(s["radius"])};
+  }
+  const Field h = obstacle["half_space"];
+  h.allow_only({"point", "normal"});
+  return HalfSpace{h["point"].vector<3>(), unit_vector(h["normal"])};
+}
+
+Transform rotation_z_translation(double angle, const Vector3& translation) {
+  Transform t;
+  t.rotation = Eigen::AngleAxisd(angle, Vector3::UnitZ()).toRotationMatrix();
+  t.translation = translation;
+  return t;
+}
+
+Tool tool(const Field& f) {
+  f.allow_only({"name", "source", "capsules", "F_T_EE", "mass", "com", "inertia"});
+  require_source(f);
+  Tool tool;
+  tool.name = f["name"].text();
+  const Field capsules = f["capsules"];
+  if (capsules.sequence_size() == 0) capsules.fail("at least one capsule");
+  for (std::size_t i = 0; i < capsules.sequence_size(); ++i) {
+    const Field c = capsules[i];
+    tool.capsules.push_back({c["name"].text(), capsule(c, {"name", "a", "b", "radius"})});
+  }
+  const Field pose = f["F_T_EE"];
+  pose.allow_only({"rotation_z", "translation"});
+  tool.F_T_EE = rotation_z_translation(pose["rotation_z"].number(), pose["translation"].vector<3>());
+  const Eigen::Matrix<double, 6, 1> I = f["inertia"].vector<6>();   // xx, xy, xz, yy, yz, zz about the CoM
+  tool.inertia.mass = positive(f["mass"]);
+  tool.inertia.com = f["com"].vector<3>();
+  tool.inertia.inertia << I[0], I[1], I[2], I[1], I[3], I[4], I[2], I[4], I[5];
+  if (!is_physical_inertia(tool.inertia.inertia)) f["inertia"].fail("a physical inertia about the CoM");
+  return tool;
+}
+
+Task task(const Field& f) {
+  const std::string type = f["type"].text();
+  if (type == "ultrasound_scan") {
+    f.allow_only({"type", "source", "start", "end", "tool_axis", "speed", "hover"});
+    require_source(f);
+    UltrasoundScan scan{f["start"].vector<3>(), f["end"].vector<3>(), unit_vector(f["tool_axis"]),
+                        positive(f["speed"]), positive(f["hover"])};
+    if ((scan.end - scan.start).norm() == 0.0) f["end"].fail("an end different from the start");
+    return scan;
+  }
+  if (type == "rcm_pivot") {
+    f.allow_only({"type", "source", "trocar", "insertion", "max_pivot_deg", "hover"});
+    require_source(f);
+    RcmPivot rcm;
+    rcm.trocar = f["trocar"].vector<3>();
+    const Eigen::Vector2d insertion = f["insertion"].vector<2>();
+    if (insertion[0] < 0.0 || insertion[1] <= insertion[0]) f["insertion"].fail("[min, max] with 0 <= min < max");
+    rcm.insertion_min = insertion[0];
+    rcm.insertion_max = insertion[1];
+    const double pivot = positive(f["max_pivot_deg"]);
+    if (pivot >= 90.0) f["max_pivot_deg"].fail("an angle below 90 degrees");
+    rcm.max_pivot = pivot * std::numbers::pi / 180.0;
+    rcm.hover = positive(f["hover"]);
+    return rcm;
+  }
+  if (type == "burr_hole") {
+    f.allow_only({"type", "source", "entry", "axis", "standoff", "advance", "speed"});
+    require_source(f);
+    return BurrHole{f["entry"].vector<3>(), unit_vector(f["axis"]), positive(f["standoff"]), positive(f["advance"]),
+                    positive(f["speed"])};
+  }
+  f["type"].fail("ultrasound_scan, rcm_pivot or burr_hole");
+}
+
+}  // namespace
+
+const NamedPose& Scene::pose(const std::string& name) const {
+  for (const auto& p : poses)
+    if (p.name == name) return p;
+  std::string list;
+  for (const auto& p : poses) list += (list.empty() ? "" : ", ") + p.name;
+  throw ConfigError(path + ": no pose named `" + name + "` (poses: " + list + ")");
+}
+
+Scene load_scene(const std::string& path) {
+  const YAML::Node root = load_yaml_file(path, "scene file");
+  const Field top(root, path, "");
+  top.allow_only({"name", "description", "frame", "clearance", "obstacles", "tool", "poses", "start", "task"});
+
+  Scene scene;
+  scene.path = path;
+  scene.name = top["name"].text();
+  top["description"].text();   // free text, required so that every scene says what it is
+  top["frame"].text();         // ... and in which frame its numbers are
+
+  const Field clearance = top["clearance"];
+  require_source(clearance);
+  for (const auto& key : clearance.keys())
+    if (key != "source") scene.clearance[key] = non_negative(clearance[key]);
+  if (!scene.clearance.contains("self")) clearance.fail("a `self` clearance besides one per obstacle class");
+
+  scene.tool = tool(top["tool"]);
+
+  // Names an exemption may refer to: the arm's capsules and the tool's.
+  std::set<std::string> capsule_names;
+  for (const auto& c : franka_arm_capsules()) capsule_names.emplace(c.name);
+  for (const auto& c : scene.tool.capsules) {
+    if (!capsule_names.insert(c.name).second)
+      top["tool"]["capsules"].fail("distinct capsule names (`" + c.name + "` is taken)");
+  }
+
+  const Field obstacles = top["obstacles"];
+  std::set<std::string> obstacle_names;
+  for (std::size_t i = 0; i < obstacles.sequence_size(); ++i) {
+    const Field o = obstacles[i];
+    o.allow_only({"name", "class", "source", "box", "capsule", "sphere", "half_space", "exempt"});
+    require_source(o);
+    Obstacle obstacle{o["name"].text(), o["class"].text(), shape(o), {}};
+    if (!obstacle_names.insert(obstacle.name).second) o["name"].fail("a name not used by another obstacle");
+    if (obstacle.obstacle_class == "self" || !scene.clearance.contains(obstacle.obstacle_class))
+      o["class"].fail("an obstacle class with a clearance in `clearance`");
+    if (o.has("exempt")) {
+      const Field exempt = o["exempt"];
+      for (std::size_t k = 0; k < exempt.sequence_size(); ++k) {
+        const std::string name = exempt[k].text();
+        if (!capsule_names.contains(name)) exempt[k].fail("the name of an arm or tool capsule");
+        obstacle.exempt.push_back(name);
+      }
+    }
+    scene.obstacles.push_back(std::move(obstacle));
+  }
+
+  const Field poses = top["poses"];
+  for (const auto& name : poses.keys()) {
+    const Field p = poses[name];
+    p.allow_only({"q", "source"});
+    require_source(p);
+    scene.poses.push_back({name, p["q"].vector<7>()});
+  }
+  scene.start = top["start"].text();
+  if (std::none_of(scene.poses.begin(), scene.poses.end(), [&](const NamedPose& p) { return p.name == scene.start; }))
+    top["start"].fail("the name of a pose in `poses`");
+
+  scene.task = task(top["task"]);
+  return scene;
+}
+
+ModelParameters with_tool(ModelParameters parameters, const Tool& tool) {
+  parameters.F_T_EE = tool.F_T_EE;
+  parameters.end_effector = tool.inertia;
+  return parameters;
+}
+
+}  // namespace csp::planners
