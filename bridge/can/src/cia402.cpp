@@ -58,8 +58,8 @@ DriveState next_state(DriveState state, uint16_t cw, uint16_t previous, int quic
       if (shutdown(cw)) return S::kReadyToSwitchOn;                                  // 8
       return disable_operation(cw) ? S::kSwitchedOn : state;                        // 5
     case S::kQuickStopActive:
-      if (disable_voltage(cw) || quick_stop_option <= 4) return S::kSwitchOnDisabled;   // 12
-      return enable_operation(cw) ? S::kOperationEnabled : state;                       // 16
+      if (disable_voltage(cw)) return S::kSwitchOnDisabled;                                   // 12
+      return quick_stop_option >= 5 && enable_operation(cw) ? S::kOperationEnabled : state;   // 16
     case S::kFaultReactionActive: return state;   // 14 happens when the reaction is over (the bus's SYNC)
     case S::kFault:
       return (cw & 0x80) && !(previous & 0x80) ? S::kSwitchOnDisabled : state;      // 15: bit 7 rising edge

@@ -365,15 +365,15 @@ void DriveNode::sync_transmit() {
 
 void DriveNode::sync_latch() {
   received_since_sync_ = false;
-  if (state_ == DriveState::kFaultReactionActive) set_state(DriveState::kFault);   // 14: the robot has braked
+  // A cycle after a fault or a quick stop, the robot's reaction is over (transitions 14 and 12).
+  if (state_ == DriveState::kFaultReactionActive) set_state(DriveState::kFault);
+  set_state(quick_stop_over(state_, static_cast<int>(values_[s_.quick_stop_option])));
   for (Pdo& pdo : pdos_) {
     if (!pdo.pending) continue;
     apply_rpdo(pdo, pdo.data.data());
     pdo.pending = false;
     received_since_sync_ = true;
   }
-  // Level-triggered transitions (a finished quick stop) advance at each SYNC.
-  set_controlword(static_cast<uint16_t>(values_[s_.controlword]));
 }
 
 void DriveNode::receive_sync(const Frame& frame) {

@@ -24,9 +24,15 @@ const char* drive_state_name(DriveState state);
 uint16_t statusword_state_bits(DriveState state);
 
 // The state after the controlword `controlword` arrives (the previous one for bit 7's rising edge).
-// quick_stop_option is 0x605A: 0-4 end a quick stop in switch on disabled, 5-8 stay in quick
-// stop active. Faults enter through fault(), not through the controlword.
+// quick_stop_option is 0x605A: 5-8 stay in quick stop active, where enable operation resumes;
+// 0-4 leave it for switch on disabled once the stop is over (quick_stop_over). Faults enter
+// through fault(), not through the controlword.
 DriveState next_state(DriveState state, uint16_t controlword, uint16_t previous_controlword, int quick_stop_option);
+
+// Transition 12 without a command: the stop is over and 0x605A is 0-4.
+inline DriveState quick_stop_over(DriveState state, int quick_stop_option) {
+  return state == DriveState::kQuickStopActive && quick_stop_option <= 4 ? DriveState::kSwitchOnDisabled : state;
+}
 
 // Transition 13: any state but fault -> fault reaction active.
 inline DriveState fault(DriveState state) {
