@@ -276,6 +276,8 @@ TEST_F(CanBus, StateWalkByRpdoShowsInTheNextTpdo) {
   sync();
   const std::vector<std::string> frames = sync();
   for (int n = 1; n <= 7; ++n) EXPECT_TRUE(in_state(statusword_in(frames, n), 0x6F, 0x27)) << n;
+  EXPECT_EQ(bus.node(6).drive_state(), DriveState::kOperationEnabled) << drive_state_name(bus.node(6).drive_state());
+  EXPECT_EQ(bus.node(6).nmt_state(), NmtState::kOperational) << nmt_state_name(bus.node(6).nmt_state());
   EXPECT_TRUE(arm.commands.back().joints[6].operation_enabled);
 }
 
@@ -321,6 +323,35 @@ TEST_F(CanBus, CommunicationConstraintsViolationIsEmcy8250) {
   const std::vector<std::string> frames = sync();
   EXPECT_NE(std::find(frames.begin(), frames.end(), "081#5082111F01000000"), frames.end());
   EXPECT_NE(std::find(frames.begin(), frames.end(), "087#5082111F07000000"), frames.end());
+}
+
+TEST(CanEmcy, EveryReflexSendsTheCodeDocumented) {
+  std::ifstream docs(CSP_SOURCE_DIR "/docs/can.md");
+  ASSERT_TRUE(docs) << "docs/can.md";
+  const std::regex row(R"(\| (\d+) \| (\w+) \| 0x([0-9A-F]{4}) \|)");
+  int rows = 0;
+  for (std::string line; std::getline(docs, line);) {
+    std::smatch m;
+    if (!std::regex_match(line, m, row)) continue;
+    const int error = std::stoi(m[1]);
+    ASSERT_LT(error, rt::kNumErrors);
+    EXPECT_EQ(m[2].str(), rt::error_name(static_cast<rt::Error>(error)));
+    TestArm arm;
+    DriveBus bus(BusSettings{}, arm);
+    bus.receive(parse_frame("000#0100"));
+    arm.state.errors.set(static_cast<rt::Error>(error));
+    bus.clear_sent();
+    bus.on_sync();
+    const std::string code = m[3].str();
+    char emcy[32];   // joint 3's EMCY: code little-endian, register, error index, joint
+    std::snprintf(emcy, sizeof emcy, "083#%s%s%02X%02X03000000", code.substr(2, 2).c_str(), code.substr(0, 2).c_str(),
+                  error == static_cast<int>(rt::Error::communication_constraints_violation) ? 0x11 : 0x81, error);
+    std::vector<std::string> frames;
+    for (const Frame& f : bus.sent()) frames.push_back(to_string(f));
+    EXPECT_NE(std::find(frames.begin(), frames.end(), emcy), frames.end()) << emcy;
+    ++rows;
+  }
+  EXPECT_EQ(rows, rt::kNumErrors);
 }
 
 // --- PDOs ------------------------------------------------------------------------------------
@@ -378,6 +409,7 @@ TEST_F(CanBus, PdoRemapBySdoAsACiA302Master) {
   EXPECT_EQ(send("601#23001A0320006C60"), std::vector<std::string>{"581#60001A0300000000"});   // 0x606C, 32 bits
   EXPECT_EQ(send("601#2F001A0003000000"), std::vector<std::string>{"581#80001A0042000406"});   // 72 bits: 0x06040042
   EXPECT_EQ(send("601#2F001A0002000000"), std::vector<std::string>{"581#60001A0000000000"});
+  EXPECT_EQ(bus.node(0).value(0x1A00, 0), 2);
   EXPECT_EQ(send("601#2300180181010000"), std::vector<std::string>{"581#6000180100000000"});   // valid again
   EXPECT_EQ(send("601#2300180182010000"), std::vector<std::string>{"581#8000180130000906"});   // new id while valid
   EXPECT_EQ(send("601#2F00180200000000"), std::vector<std::string>{"581#8000180230000906"});   // TPDO type 0

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "csp/can/frame.hpp"
 #include "csp/rt/errors.hpp"
 
 namespace csp::can {
@@ -174,15 +175,15 @@ ObjectTable object_table(const JointDrive& drive, const Identity& identity) {
     std::vector<int64_t> map;
   };
   const std::array<Pdo, od::kNumRpdos> rpdos{{
-      {0x200, 1, {mapping(od::kControlword, 0, 16), mapping(od::kTargetTorque, 0, 16)}},
-      {0x300, 1, {mapping(od::kTargetPosition, 0, 32), mapping(od::kTorqueOffset, 0, 16)}},
-      {0x400, 1, {mapping(od::kTargetVelocity, 0, 32), mapping(od::kTorqueOffset, 0, 16)}},
-      {0x500, 255, {mapping(od::kModesOfOperation, 0, 8)}},
+      {kRpdo1, 1, {mapping(od::kControlword, 0, 16), mapping(od::kTargetTorque, 0, 16)}},
+      {kRpdo2, 1, {mapping(od::kTargetPosition, 0, 32), mapping(od::kTorqueOffset, 0, 16)}},
+      {kRpdo3, 1, {mapping(od::kTargetVelocity, 0, 32), mapping(od::kTorqueOffset, 0, 16)}},
+      {kRpdo4, 255, {mapping(od::kModesOfOperation, 0, 8)}},
   }};
   const std::array<Pdo, od::kNumTpdos> tpdos{{
-      {0x180, 1, {mapping(od::kStatusword, 0, 16), mapping(od::kPositionActualValue, 0, 32),
+      {kTpdo1, 1, {mapping(od::kStatusword, 0, 16), mapping(od::kPositionActualValue, 0, 32),
                   mapping(od::kTorqueActualValue, 0, 16)}},
-      {0x280, 1, {mapping(od::kVelocityActualValue, 0, 32), mapping(od::kTauExtHatFiltered, 0, 16),
+      {kTpdo2, 1, {mapping(od::kVelocityActualValue, 0, 32), mapping(od::kTauExtHatFiltered, 0, 16),
                   mapping(od::kModesOfOperationDisplay, 0, 8)}},
   }};
   auto communication = [&](uint16_t index, const Pdo& pdo, const char* kind, int number) {

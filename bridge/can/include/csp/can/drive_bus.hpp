@@ -55,6 +55,8 @@ class DriveBus {
  public:
   // Powers the seven nodes on (their boot-up messages are the first frames sent).
   DriveBus(const BusSettings& settings, Arm& arm);
+  DriveBus(const DriveBus&) = delete;   // the nodes send into this object's outbox
+  DriveBus& operator=(const DriveBus&) = delete;
 
   // One frame from the bus; a SYNC runs one cycle.
   void receive(const Frame& frame);
@@ -68,7 +70,6 @@ class DriveBus {
   void clear_sent() { out_.clear(); }
 
   const DriveNode& node(int joint) const { return nodes_[joint]; }   // joint 0..6
-  const ArmCommand& last_command() const { return command_; }
   const BusCounters& counters() const { return counters_; }
 
  private:

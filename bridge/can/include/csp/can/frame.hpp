@@ -21,7 +21,7 @@ inline constexpr uint32_t kNmt = 0x000;
 inline constexpr uint32_t kSync = 0x080;
 inline constexpr uint32_t kEmcy = 0x080;
 inline constexpr uint32_t kTpdo1 = 0x180, kRpdo1 = 0x200, kTpdo2 = 0x280, kRpdo2 = 0x300;
-inline constexpr uint32_t kTpdo3 = 0x380, kRpdo3 = 0x400, kTpdo4 = 0x480, kRpdo4 = 0x500;
+inline constexpr uint32_t kRpdo3 = 0x400, kRpdo4 = 0x500;   // (TPDO3/4, 0x380/0x480, are not used)
 inline constexpr uint32_t kSdoTx = 0x580;   // server -> client
 inline constexpr uint32_t kSdoRx = 0x600;   // client -> server
 inline constexpr uint32_t kHeartbeat = 0x700;
