@@ -177,6 +177,9 @@ TEST_F(CanBus, SegmentedDownloadAndToggleErrors) {
   EXPECT_EQ(send("601#2117100002000000"), std::vector<std::string>{"581#6017100000000000"});
   EXPECT_EQ(send("601#0BE8030000000000"), std::vector<std::string>{"581#2000000000000000"});
   EXPECT_EQ(send("601#4017100000000000"), std::vector<std::string>{"581#4B171000E8030000"});
+  // 3 bytes (n = 4, c = 1: 0x09) for a 2-byte object: abort 0x06070012 instead of the confirmation.
+  EXPECT_EQ(send("601#2117100003000000"), std::vector<std::string>{"581#6017100000000000"});
+  EXPECT_EQ(send("601#09E8030100000000"), std::vector<std::string>{"581#8017100012000706"});
   // A first segment with the toggle bit set: abort 0x05030000.
   EXPECT_EQ(send("601#2117100002000000"), std::vector<std::string>{"581#6017100000000000"});
   EXPECT_EQ(send("601#1BE8030000000000"), std::vector<std::string>{"581#8017100000000305"});

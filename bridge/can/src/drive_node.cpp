@@ -179,17 +179,14 @@ void DriveNode::receive_sdo(const Frame& request) {
       const int n = 7 - ((d[0] >> 1) & 0x7);
       if (sdo_.data.size() + n > 8) return sdo_abort(e.index, e.subindex, abort::kLengthTooHigh);
       sdo_.data.insert(sdo_.data.end(), d + 1, d + 1 + n);
-      send_sdo({static_cast<uint8_t>(0x20 | (toggle ? 0x10 : 0)), 0, 0, 0, 0, 0, 0, 0});
-      sdo_.toggle = !sdo_.toggle;
-      if (d[0] & 0x01) {   // last segment
+      if (d[0] & 0x01) {   // last segment: the value is written (or refused) before the answer
         const uint32_t code = sdo_write(sdo_.slot, sdo_.data.data(), sdo_.data.size());
-        const SdoTransfer done = sdo_;
+        if (code != 0) return sdo_abort(e.index, e.subindex, code);
         sdo_ = {};
-        if (code != 0) {
-          out_.pop_back();   // the segment's confirmation is replaced by the abort
-          sdo_abort(table_.entries[done.slot].index, table_.entries[done.slot].subindex, code);
-        }
+      } else {
+        sdo_.toggle = !sdo_.toggle;
       }
+      send_sdo({static_cast<uint8_t>(0x20 | (toggle ? 0x10 : 0)), 0, 0, 0, 0, 0, 0, 0});
       return;
     }
     case 2: {   // initiate upload
