@@ -21,6 +21,7 @@ Command add_serve_command(CLI::App& app);
 Command add_replay_command(CLI::App& app);
 Command add_log_command(CLI::App& app);
 Command add_gap_command(CLI::App& app);
+Command add_can_command(CLI::App& app);
 
 struct WorkspaceArguments {
   ModelArguments model;

@@ -1,0 +1,47 @@
+// Classic CAN frames (11-bit identifiers, up to 8 data bytes) and the CANopen (CiA 301)
+// pre-defined connection set: COB-ID = function code + node id.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+namespace csp::can {
+
+struct Frame {
+  uint32_t id = 0;    // 11-bit identifier (COB-ID)
+  uint8_t dlc = 0;    // data length, 0..8
+  std::array<uint8_t, 8> data{};
+
+  bool operator==(const Frame&) const = default;
+};
+
+// CiA 301 pre-defined connection set (function codes; add the node id where one applies).
+inline constexpr uint32_t kNmt = 0x000;
+inline constexpr uint32_t kSync = 0x080;
+inline constexpr uint32_t kEmcy = 0x080;
+inline constexpr uint32_t kTpdo1 = 0x180, kRpdo1 = 0x200, kTpdo2 = 0x280, kRpdo2 = 0x300;
+inline constexpr uint32_t kRpdo3 = 0x400, kRpdo4 = 0x500;   // (TPDO3/4, 0x380/0x480, are not used)
+inline constexpr uint32_t kSdoTx = 0x580;   // server -> client
+inline constexpr uint32_t kSdoRx = 0x600;   // client -> server
+inline constexpr uint32_t kHeartbeat = 0x700;
+
+// A frame is well formed when its identifier has 11 bits and its length is 0..8.
+bool is_valid(const Frame& frame);
+
+// candump's compact form: "602#2B40600006000000" (hex id, '#', hex data bytes).
+std::string to_string(const Frame& frame);
+// The inverse of to_string; std::invalid_argument naming what is wrong.
+Frame parse_frame(const std::string& text);
+
+// Little-endian field access (CANopen transmits least significant byte first).
+inline uint64_t get_le(const uint8_t* bytes, int size) {
+  uint64_t value = 0;
+  for (int i = size - 1; i >= 0; --i) value = (value << 8) | bytes[i];
+  return value;
+}
+inline void put_le(uint8_t* bytes, int size, uint64_t value) {
+  for (int i = 0; i < size; ++i) bytes[i] = static_cast<uint8_t>(value >> (8 * i));
+}
+
+}  // namespace csp::can
