@@ -1,6 +1,8 @@
 // csp emulate: run a scenario on the emulated robot with its built-in controller and report the
 // tracking error, reflexes and timing; optionally write the per-cycle CSV log.
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -64,6 +66,8 @@ void print_percentiles(const char* name, const rt::Percentiles& p) {
               p.max, p.count);
 }
 
+std::atomic<bool> interrupted{false};
+
 int run_emulate(const EmulateArguments& args) {
   rt::Scenario scenario = args.scenario.load();
   if (args.seed) {
@@ -88,10 +92,23 @@ int run_emulate(const EmulateArguments& args) {
   options.clock = scenario.clock;
   options.faults = scenario.command_faults;
   options.max_duration = scenario.duration;
+  // Ctrl-C (or SIGTERM) and a log that cannot be written end the motion as its duration would:
+  // the robot holds, the summary is printed, the logs end with whole rows and events.
+  interrupted = false;
+  std::signal(SIGINT, [](int) { interrupted = true; });
+  std::signal(SIGTERM, [](int) { interrupted = true; });
+  options.stop = &interrupted;
+  std::string write_error;
   options.observer = [&](const rt::RobotState& state, const rt::CycleInfo& cycle) {
-    if (log) log->write(state, cycle);
-    if (lcm_log) lcm_log->record(state, cycle);
     summary.add(state, static_cast<double>(state.time.toMSec() - start_ms) * 1e-3);
+    if (!write_error.empty()) return;
+    try {
+      if (log) log->write(state, cycle);
+      if (lcm_log) lcm_log->record(state, cycle);
+    } catch (const std::exception& e) {
+      write_error = e.what();
+      interrupted = true;
+    }
   };
 
   std::printf("csp emulate: %s (%s)\n  robot %s, %s clock, %.3f s, seed %llu, controller %s (%s mode)\n",
@@ -123,6 +140,14 @@ int run_emulate(const EmulateArguments& args) {
     std::printf("  LCM log: %s (%llu events)\n", args.lcm_log.c_str(), static_cast<unsigned long long>(lcm_log->log().events()));
 
   const rt::RobotState& state = emulator.state();
+  if (!write_error.empty()) {
+    std::printf("  STOPPED at t = %.3f s: %s\n", state.time.toSec(), write_error.c_str());
+    return 1;
+  }
+  if (interrupted) {
+    std::printf("  STOPPED at t = %.3f s by a signal (Ctrl-C or SIGTERM)\n", state.time.toSec());
+    return 130;
+  }
   if (!failure.empty() || state.robot_mode == rt::RobotMode::kReflex) {
     std::printf("  REFLEX at t = %.3f s: %s\n", state.time.toSec(),
                 emulator.reflex_reason().c_str());

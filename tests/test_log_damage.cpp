@@ -143,5 +143,41 @@ TEST(LogDamage, ReplayCommandExitsNonZeroOnADamagedLog) {
   std::filesystem::remove(path);
 }
 
+// A log that cannot be written is named as such and stops the run cleanly (it was reported as a
+// reflex with an empty reason).
+TEST(LogDamage, EmulateNamesAWriteErrorAndStops) {
+  test::Process emulate({CSP_EXECUTABLE, "emulate", "--duration", "1", "--log", "/dev/full"}, test::temp_path("full.out"));
+  EXPECT_EQ(emulate.wait(std::chrono::seconds(60)), 1);
+  const std::string out = emulate.output();
+  EXPECT_NE(out.find("STOPPED at t = "), std::string::npos) << out;
+  EXPECT_NE(out.find("writing the log failed"), std::string::npos) << out;
+  EXPECT_EQ(out.find("REFLEX"), std::string::npos) << out;
+}
+
+// Ctrl-C ends `csp emulate` with its summary and whole logs: the LCM log reads without damage and
+// replays bit for bit, the CSV ends with a complete row.
+TEST(LogDamage, EmulateStopsCleanlyOnCtrlC) {
+  const std::string lcm_log = test::temp_path("sigint.lcmlog"), csv = test::temp_path("sigint.csv");
+  test::Process emulate({CSP_EXECUTABLE, "emulate", "--duration", "3600", "--clock", "lockstep", "--lcm-log", lcm_log, "--log", csv},
+                        test::temp_path("sigint.out"));
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  emulate.signal(SIGINT);
+  EXPECT_EQ(emulate.wait(std::chrono::seconds(60)), 130);
+  const std::string out = emulate.output();
+  EXPECT_NE(out.find("STOPPED at t = "), std::string::npos) << out;
+  EXPECT_NE(out.find("ran "), std::string::npos) << out;   // the summary
+  LogReader log(lcm_log);
+  uint64_t events = 0;
+  while (log.next()) ++events;
+  EXPECT_GT(events, 10u);
+  EXPECT_TRUE(log.damage().empty()) << log.damage_summary();
+  EXPECT_TRUE(resimulate(lcm_log).identical());
+  std::ifstream in(csv, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.back(), '\n');
+  for (const std::string& f : {lcm_log, csv}) std::filesystem::remove(f);
+}
+
 }  // namespace
 }  // namespace csp::bridge

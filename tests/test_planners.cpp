@@ -390,7 +390,7 @@ TEST(Fourier, TrajectoryIsAJointLogWithTheTorqueItNeeds) {
   ASSERT_EQ(read.ddq.size(), 2001u);
   KdlPeer kdl(model);
   for (std::size_t k : {std::size_t{0}, std::size_t{777}, std::size_t{2000}}) {
-    const JointSample s = series.sample(read.t[k]);
+    const planners::JointSample s = series.sample(read.t[k]);
     EXPECT_EQ(read.q[k], s.q);
     const Vector7 expected = kdl.rnea(s.q, s.dq, s.ddq) + friction_torque(model.parameters().friction, s.dq);
     EXPECT_LT((read.tau_J[k] - expected).cwiseAbs().maxCoeff(), 1e-9) << "row " << k;

@@ -41,14 +41,32 @@ LogWriter::LogWriter(const std::string& path) : path_(path), file_(std::make_uni
 }
 
 void LogWriter::write(const std::string& channel, const void* data, int size, int64_t utime) {
+  if (!file_) throw std::runtime_error(path_ + ": the LCM log was closed after a write error");
   lcm::LogEvent event{};
   event.timestamp = utime;
   event.channel = channel;
   event.datalen = size;
   event.data = const_cast<void*>(data);   // LogFile::writeEvent does not write through it
-  if (file_->writeEvent(&event) != 0) throw std::runtime_error(path_ + ": writing the LCM log failed (disk full?)");
+  if (file_->writeEvent(&event) != 0) fail_write();
   ++counts_[channel];
   ++events_;
+}
+
+void LogWriter::fail_write() {
+  // Part of an event may have reached the file: cut it after the last whole event, so that what
+  // was written stays a valid log (a regular file; a device such as /dev/full holds nothing).
+  file_.reset();
+  std::error_code error;
+  if (std::filesystem::is_regular_file(path_, error)) {
+    LogReader written(path_);
+    while (written.next()) {
+    }
+    const std::vector<LogDamage>& damage = written.damage();
+    if (!damage.empty() && damage.back().offset + damage.back().bytes_skipped == std::filesystem::file_size(path_, error))
+      std::filesystem::resize_file(path_, damage.back().offset, error);
+  }
+  throw std::runtime_error(path_ + ": writing the LCM log failed (disk full or the file system refused it); the file ends "
+                           "at its last whole event");
 }
 
 uint64_t LogWriter::count(const std::string& channel) const {
@@ -56,7 +74,9 @@ uint64_t LogWriter::count(const std::string& channel) const {
   return it == counts_.end() ? 0 : it->second;
 }
 
-void LogWriter::flush() { std::fflush(file_->getFilePtr()); }
+void LogWriter::flush() {
+  if (file_ && std::fflush(file_->getFilePtr()) != 0) fail_write();
+}
 
 LogReader::LogReader(const std::string& path) : path_(path) {
   // A FIFO or a device would block or never end: only regular files are logs.

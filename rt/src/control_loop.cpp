@@ -51,11 +51,12 @@ class MotionRunner {
   // Reflex, or motion_finished was received.
   bool done() const { return !emulator_.in_motion(); }
 
-  // The controller's command of the last cycle of max_duration closes the motion, as if it had
-  // returned MotionFinished (a motion generator continues smoothly into it).
-  void close_at_max_duration(Command& command) const {
+  // The controller's command of the last cycle of max_duration (or after a stop request) closes the
+  // motion, as if it had returned MotionFinished (a motion generator continues smoothly into it).
+  void close_when_due(Command& command) const {
     if (options_.max_duration && static_cast<double>(report_.cycles + 1) * kDeltaT >= *options_.max_duration - 1e-9)
       command.motion_finished = true;
+    if (options_.stop && options_.stop->load()) command.motion_finished = true;
   }
 
   MotionResult finish() {
@@ -91,7 +92,7 @@ MotionResult run_lockstep(MotionRunner& runner) {
   Duration period(0);
   while (true) {
     Command command = runner.call_controller(period);
-    runner.close_at_max_duration(command);
+    runner.close_when_due(command);
     runner.step(command, runner.network_delivers());
     period = Duration(1);
     if (runner.done()) break;
@@ -116,7 +117,7 @@ MotionResult run_realtime(MotionRunner& runner) {
   while (true) {
     clock.wait();
     Command command = runner.call_controller(period);
-    runner.close_at_max_duration(command);
+    runner.close_when_due(command);
     // The command counts only if it is back before the next cycle begins (the FCI's rule). Late
     // by `missed` deadlines, it is lost, and so are the cycles that passed meanwhile and the one the
     // clock skips to stay on the grid: 1 + missed robot cycles in all, the period the controller is

@@ -338,10 +338,27 @@ void JointLogCsvWriter::write_row(const JointLog& log, std::size_t row) {
   }
   line_.back() = '\n';
   out_ << line_;
-  if (!out_) throw JointLogError(path_ + ": writing the log failed (disk full?)");
+  if (!out_) fail_write();
 }
 
-void JointLogCsvWriter::flush() { out_.flush(); }
+void JointLogCsvWriter::flush() {
+  out_.flush();
+  if (!out_) fail_write();
+}
+
+void JointLogCsvWriter::fail_write() {
+  // Part of a row may have reached the file: cut it at the last complete row, so that what was
+  // written stays a valid log (a regular file; a device such as /dev/full holds nothing).
+  out_.close();
+  std::error_code error;
+  if (std::filesystem::is_regular_file(path_, error)) {
+    std::ifstream in(path_, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), {});
+    std::filesystem::resize_file(path_, text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1, error);
+  }
+  throw JointLogError(path_ + ": writing the log failed (disk full or the file system refused it); the file ends at its "
+                      "last complete row");
+}
 
 void write_joint_log_csv(const std::string& path, const JointLog& log) {
   JointLogCsvWriter writer(path, log);

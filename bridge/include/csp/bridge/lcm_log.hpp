@@ -29,6 +29,8 @@ class LogWriter {
   void flush();
 
  private:
+  [[noreturn]] void fail_write();
+
   std::string path_;
   std::unique_ptr<lcm::LogFile> file_;
   std::map<std::string, uint64_t> counts_;

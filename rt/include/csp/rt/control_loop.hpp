@@ -3,6 +3,7 @@
 // absolute 1 kHz deadlines). Commands pass a seeded network model that can lose them.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -79,6 +80,9 @@ struct LoopOptions {
   RealtimeConfig realtime_config = RealtimeConfig::kIgnore;
   CommandFaults faults;
   std::optional<double> max_duration;   // [s]: end the motion normally after this long
+  // Set (by a signal handler, another thread or the observer) to end the motion as at
+  // max_duration: the next command carries motion_finished.
+  const std::atomic<bool>* stop = nullptr;
   CycleObserver observer;               // called after every cycle with the published state
 };
 

@@ -137,6 +137,8 @@ class JointLogCsvWriter {
   const std::string& path() const { return path_; }
 
  private:
+  [[noreturn]] void fail_write();
+
   std::string path_;
   std::ofstream out_;
   std::vector<const ColumnGroup*> groups_;
