@@ -34,7 +34,7 @@ KDL::Chain build_dynamics_chain(const KdlDescription& description, std::array<KD
     if (last) inertia = inertia + to_kdl(description.end_effector) + to_kdl(description.load);
 
     const std::string n = std::to_string(i + 1);
-    const KDL::Joint joint("joint" + n, KDL::Joint::RotZ, 1.0, rows[i].theta_offset);
+    const KDL::Joint joint("joint" + n, KDL::Joint::RotZ, 1.0, rows[i].theta_offset, description.armature[i]);
     chain.addSegment(KDL::Segment("link" + n, joint, KDL::Frame(KDL::Vector(0.0, 0.0, rows[i].d)) * frame_T_tip, inertia));
   }
   return chain;

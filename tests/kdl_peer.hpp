@@ -60,6 +60,7 @@ struct KdlDescription {
   std::array<RigidBodyInertia, kNumJoints> links{};   // link i in MDH frame i
   RigidBodyInertia end_effector, load;                // flange frame
   Vector3 gravity = Vector3::Zero();
+  std::array<double, kNumJoints> armature{};          // KDL::Joint inertia (rotor inertia on the joint axis)
 };
 
 class KdlPeer {
@@ -111,6 +112,7 @@ inline KdlDescription KdlPeer::describe(const Model& model) {
   d.end_effector = p.end_effector;
   d.load = p.load;
   d.gravity = model.gravity();
+  Vector7::Map(d.armature.data()) = model.armature();
   return d;
 }
 #endif

@@ -1,6 +1,7 @@
 // The emulated robot (rt/): integrator, torque interface, estimators, faults, determinism and
 // scenario files, checked against independent references (a fine RK4 integration of the plant,
 // energy, the applied wrench, the scenario's reference trajectory).
+#include <cstdio>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -170,7 +171,7 @@ TEST(EmulatorIntegrator, CoastingConservesEnergy) {
 TEST(EmulatorTorqueLoop, FirstOrderBandwidth) {
   rt::EmulatorSettings settings = matched_settings();
   settings.torque_loop_bandwidth_hz = 100.0;   // time constant 1.59 ms
-  settings.armature.setZero();
+  settings.plant.armature.setZero();
   Emulator emulator(settings);
   const Vector7 before(emulator.state().tau_J.data());
   Vector7 tau = Vector7::Zero();
@@ -326,6 +327,74 @@ TEST(EmulatorReflex, Fr3PositionBasedVelocityLimit) {
   EXPECT_LT(emulator.state().q[3], limits.q_max[3]) << "before reaching the position limit";
 }
 
+// The commanded Cartesian and elbow rates of a joint position motion, as the robot reports them:
+// O_dP_EE_d = O_dP_EE_c = J(q_c) dq_c, O_ddP_EE_c = J ddq_c + dJ dq_c, delbow_c / ddelbow_c = the
+// joint-3 rates, checked against finite differences of the reported desired pose O_T_EE_d and
+// elbow_c over consecutive cycles. The robot's rates at cycle k are those of the backward
+// differences of q_c (dq_c = (q_c,k - q_c,k-1) / dt), so the pose differences are taken the same
+// way; what remains is the truncation of a first-order difference of a smooth curve, O(dt) of the
+// next derivative: bounds 1e-3 m/s, 3e-3 rad/s and 2e-2 m/s^2 on an excitation moving the EE at
+// up to 0.74 m/s (observed 6.0e-4 m/s, 1.4e-3 rad/s, 4.8e-3 m/s^2).
+TEST(EmulatorState, CommandedCartesianRatesAreFiniteDifferencesOfDesiredPose) {
+  rt::Scenario scenario = default_scenario();
+  scenario.controller.type = "joint_position";
+  scenario.emulator.external_wrenches.clear();
+  Emulator emulator(scenario.emulator);
+  const auto builtin = rt::make_controller(scenario.controller, {}, emulator);
+  std::vector<rt::RobotState> states;
+  rt::LoopOptions options;
+  options.max_duration = 3.0;
+  options.observer = [&](const rt::RobotState& s, const rt::CycleInfo&) { states.push_back(s); };
+  ASSERT_FALSE(rt::run_motion(emulator, builtin.mode, builtin.controller, options).reflex);
+
+  const double dt = rt::kDeltaT;
+  const auto position = [](const rt::RobotState& s) { return Vector3(s.O_T_EE_d[12], s.O_T_EE_d[13], s.O_T_EE_d[14]); };
+  const auto rotation = [](const rt::RobotState& s) { return Matrix3(Eigen::Map<const Eigen::Matrix4d>(s.O_T_EE_d.data()).topLeftCorner<3, 3>()); };
+  double worst_v = 0.0, worst_w = 0.0, worst_a = 0.0, fastest = 0.0;
+  for (std::size_t k = 2; k + 1 < states.size(); ++k) {   // the last state is Idle (motion finished)
+    const rt::RobotState &s = states[k], &s1 = states[k - 1], &s2 = states[k - 2];
+    ASSERT_EQ(s.robot_mode, rt::RobotMode::kMove);
+    const Vector6 twist(s.O_dP_EE_d.data());
+    EXPECT_EQ(s.O_dP_EE_c, s.O_dP_EE_d);
+    const Vector3 v_fd = (position(s) - position(s1)) / dt;
+    const Eigen::AngleAxisd turn(rotation(s) * rotation(s1).transpose());   // spatial angular velocity
+    const Vector3 w_fd = turn.angle() * turn.axis() / dt;
+    const Vector3 a_fd = (position(s) - 2.0 * position(s1) + position(s2)) / (dt * dt);
+    worst_v = std::max(worst_v, (twist.head<3>() - v_fd).norm());
+    worst_w = std::max(worst_w, (twist.tail<3>() - w_fd).norm());
+    worst_a = std::max(worst_a, (Vector6(s.O_ddP_EE_c.data()).head<3>() - a_fd).norm());
+    fastest = std::max(fastest, v_fd.norm());
+
+    // The elbow: joint 3's commanded rates, exact differences of elbow_c but for round-off.
+    EXPECT_NEAR(s.delbow_c[0], (s.elbow_c[0] - s1.elbow_c[0]) / dt, 1e-9);
+    EXPECT_NEAR(s.ddelbow_c[0], (s.delbow_c[0] - s1.delbow_c[0]) / dt, 1e-6);
+    EXPECT_EQ(s.delbow_c[1], 0.0);
+    EXPECT_EQ(s.ddelbow_c[1], 0.0);
+  }
+  EXPECT_GT(fastest, 0.1) << "the EE really moves [m/s]";
+  EXPECT_LT(worst_v, 1e-3);
+  EXPECT_LT(worst_w, 3e-3);
+  EXPECT_LT(worst_a, 2e-2);
+  std::printf("O_dP_EE_d vs FD: linear %.3g m/s, angular %.3g rad/s; O_ddP_EE_c vs FD: %.3g m/s^2 (EE up to %.3g m/s)\n",
+              worst_v, worst_w, worst_a, fastest);
+}
+
+// In torque mode there is no motion generator: libfranka reports the commanded rates as zero.
+TEST(EmulatorState, CommandedRatesAreZeroInTorqueMode) {
+  Emulator emulator(matched_settings());
+  Vector7 tau = Vector7::Zero();
+  tau[0] = 0.5;
+  const auto states = run_constant_torque(emulator, tau, 200);
+  ASSERT_GT(std::abs(states.back().dq[0]), 0.01) << "the arm moves";
+  for (const rt::RobotState& s : states) {
+    for (const double v : s.O_dP_EE_d) ASSERT_EQ(v, 0.0);
+    for (const double v : s.O_dP_EE_c) ASSERT_EQ(v, 0.0);
+    for (const double v : s.O_ddP_EE_c) ASSERT_EQ(v, 0.0);
+    for (const double v : s.delbow_c) ASSERT_EQ(v, 0.0);
+    for (const double v : s.ddelbow_c) ASSERT_EQ(v, 0.0);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Timing and faults
 
@@ -429,6 +498,46 @@ TEST(EmulatorFaults, ControllerFailureEndsInReflexWithCompleteLog) {
     EXPECT_NE(last.find(",Reflex,"), std::string::npos) << last;
     EXPECT_EQ(last.rfind("0.501,", 0), 0u) << last;
   }
+}
+
+// The controller's failure is an input of the cycle, like a command or a lost one: the command
+// intake ends the motion in that very cycle (Reflex, the reason reported, no error flag: libfranka
+// has none for it), the arm brakes to a standstill, and the failure counts as no lost command.
+TEST(EmulatorFaults, ControllerFailureIsACycleInputThatBrakesTheArm) {
+  Emulator emulator(matched_settings());
+  emulator.start_motion(ControlMode::kJointVelocity);
+  Command command;
+  for (int k = 0; k < 300; ++k) {   // joint 1 ramps up to 0.3 rad/s (0.001 rad/s per cycle)
+    command.values[0] = std::min(0.3, 0.001 * (k + 1));
+    emulator.step(&command);
+  }
+  ASSERT_EQ(emulator.state().robot_mode, rt::RobotMode::kMove);
+  const double moving = emulator.state().dq[0];
+  ASSERT_GT(moving, 0.25);
+  const uint64_t lost_before = emulator.counters().lost_commands;
+  const uint64_t time_before = emulator.state().time.toMSec();
+
+  emulator.step(rt::CycleInput::controller_failed("the controller threw: test"));
+  EXPECT_EQ(emulator.state().time.toMSec(), time_before + 1);
+  EXPECT_EQ(emulator.state().robot_mode, rt::RobotMode::kReflex);
+  EXPECT_EQ(emulator.reflex_reason(), "the controller threw: test");
+  EXPECT_FALSE(emulator.state().current_errors);
+  EXPECT_FALSE(emulator.in_motion());
+  EXPECT_EQ(emulator.counters().lost_commands, lost_before);
+  EXPECT_LT(emulator.state().dq[0], moving) << "braking starts in the failing cycle";
+
+  for (int k = 0; k < 600; ++k) emulator.step(nullptr);
+  EXPECT_TRUE(near(dq_of(emulator.state()), Vector7::Zero(), 0.0)) << "brakes closed";
+  EXPECT_EQ(emulator.state().robot_mode, rt::RobotMode::kReflex);
+}
+
+// Outside a motion there is nothing to refuse: a failure or a command reaching an idle robot changes nothing.
+TEST(EmulatorFaults, ControllerFailureWithoutMotionIsIgnored) {
+  Emulator emulator(matched_settings());
+  emulator.step(rt::CycleInput::controller_failed("late news"));
+  EXPECT_EQ(emulator.state().robot_mode, rt::RobotMode::kIdle);
+  EXPECT_TRUE(emulator.reflex_reason().empty());
+  EXPECT_NO_THROW(emulator.start_motion(ControlMode::kTorque));
 }
 
 // control_command_success_rate: the share of the last 100 commands received, counted here from

@@ -8,11 +8,14 @@
 // O(eps/h); each test states its h and bound.
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "kdl_peer.hpp"
 #include "support.hpp"
 
 namespace csp::test {
@@ -272,6 +275,113 @@ TEST(PropertiesForwardDynamics, RneaInvertsAba) {
       const Vector7 ddq_contact = data.ddq;
       rnea(arm.model, data, s.q, s.dq, ddq_contact, f, back);
       ASSERT_TRUE(near_rel(back, tau, kExact));
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Armature: the rotor inertia reflected to the link, I_a,i on joint axis i (Featherstone sec. 7.3,
+// Pinocchio model.armature). M becomes M + diag(I_a), RNEA adds I_a,i ddq_i, ABA adds I_a,i to D_i.
+
+// The physical arms with rotor inertias of the order of a geared motor's reflected inertia [kg m^2].
+std::vector<Arm> arms_with_armature() {
+  std::vector<Arm> arms;
+  for (const Arm& arm : physical_arms()) {
+    ModelParameters p = arm.model.parameters();
+    p.armature << 0.4, 0.4, 0.3, 0.3, 0.1, 0.1, 0.05;
+    arms.push_back({arm.name + "_armature", Model(p)});
+  }
+  return arms;
+}
+
+// The two forward dynamics agree with armature and contact wrenches: ABA's D_i = I_a,i + S_i^T U_i
+// and the Cholesky solve of (M + diag(I_a)) ddq = tau - c - g + sum J^T f.
+TEST(PropertiesArmature, AbaEqualsCholeskyWithLinkWrenches) {
+  for (const Arm& arm : arms_with_armature()) {
+    SCOPED_TRACE(arm.name);
+    RandomStates random(13);
+    Data data;
+    for (const State& s : random_states(arm.model)) {
+      const Vector7 tau = gravity_of(arm.model, s.q) + random.uniform(20.0);
+      const LinkWrenches f = random_wrenches(random);
+      aba(arm.model, data, s.q, s.dq, tau, f);
+      const Vector7 ddq_aba = data.ddq;
+      forward_dynamics_cholesky(arm.model, data, s.q, s.dq, tau, f);
+      ASSERT_TRUE(near_rel(ddq_aba, data.ddq, 1e-9));
+    }
+  }
+}
+
+// Inverse dynamics undoes forward dynamics with armature and contact wrenches.
+TEST(PropertiesArmature, RneaInvertsAbaWithLinkWrenches) {
+  for (const Arm& arm : arms_with_armature()) {
+    SCOPED_TRACE(arm.name);
+    RandomStates random(14);
+    Data data;
+    for (const State& s : random_states(arm.model)) {
+      const Vector7 tau = gravity_of(arm.model, s.q) + random.uniform(20.0);
+      const LinkWrenches f = random_wrenches(random);
+      aba(arm.model, data, s.q, s.dq, tau, f);
+      const Vector7 ddq = data.ddq;
+      Vector7 back;
+      rnea(arm.model, data, s.q, s.dq, ddq, f, back);
+      ASSERT_TRUE(near_rel(back, tau, kExact));
+    }
+  }
+}
+
+// M = d tau / d ddq: column j of CRBA's M is the central difference of RNEA along ddq = e_j, with
+// contact wrenches (which do not depend on ddq). RNEA is linear in ddq, so the difference is exact
+// but for round-off: h = 1 rad/s^2, bound 1e-9 (observed ~1e-14).
+TEST(PropertiesArmature, MassMatrixIsFiniteDifferenceOfRneaInAcceleration) {
+  constexpr double h = 1.0;
+  for (const Arm& arm : arms_with_armature()) {
+    SCOPED_TRACE(arm.name);
+    RandomStates random(15);
+    Data data;
+    for (const State& s : random_states(arm.model)) {
+      const LinkWrenches f = random_wrenches(random);
+      Matrix7 fd;
+      for (int j = 0; j < kNumJoints; ++j) {
+        Vector7 plus, minus;
+        rnea(arm.model, data, s.q, s.dq, s.ddq + h * Vector7::Unit(j), f, plus);
+        rnea(arm.model, data, s.q, s.dq, s.ddq - h * Vector7::Unit(j), f, minus);
+        fd.col(j) = (plus - minus) / (2.0 * h);
+      }
+      ASSERT_TRUE(near_rel(mass_of(arm.model, s.q), fd, kExact));
+    }
+  }
+}
+
+// KDL's joint inertia (KDL::Joint's `inertia`, added by ChainIdSolver_RNE and ChainDynParam) is the
+// same rotor model: inverse dynamics, mass matrix and forward dynamics agree with KDL's (absolute
+// 1e-9, as in test_kdl.cpp).
+TEST(PropertiesArmature, MatchesKdlJointInertia) {
+  for (const Arm& arm : arms_with_armature()) {
+    SCOPED_TRACE(arm.name);
+    KdlPeer kdl(arm.model);
+    Data data;
+    for (const State& s : random_states(arm.model)) {
+      Vector7 tau;
+      rnea(arm.model, data, s.q, s.dq, s.ddq, tau);
+      ASSERT_TRUE(near(tau, kdl.rnea(s.q, s.dq, s.ddq), 1e-9));
+      ASSERT_TRUE(near(mass_of(arm.model, s.q), kdl.mass(s.q), 1e-9));
+      aba(arm.model, data, s.q, s.dq, tau);
+      ASSERT_TRUE(near(data.ddq, kdl.forward_dynamics(s.q, s.dq, tau), 1e-9));
+    }
+  }
+}
+
+// A rotor inertia is non-negative and finite; anything else is refused by name.
+TEST(PropertiesArmature, NegativeOrNonFiniteArmatureRejected) {
+  for (const double bad : {-0.1, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    ModelParameters p = physical_arms().front().model.parameters();
+    p.armature[3] = bad;
+    try {
+      const Model model(p);
+      ADD_FAILURE() << "accepted armature " << bad;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("armature"), std::string::npos) << e.what();
     }
   }
 }

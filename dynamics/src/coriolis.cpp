@@ -8,6 +8,7 @@ namespace csp {
 //   C = sum_i J_i^T (I_i dJ_i + B_i J_i),  B_i = 1/2 [ (v_i x*) I_i + (I_i v_i) x-bar* - I_i (v_i x) ],
 // so that B_i + B_i^T = dI_i/dt and hence dM/dt - 2C is skew-symmetric. Columns of J_i are the axes
 // S_k (k <= i) and those of dJ_i are dS_k/dt = v_k x S_k; summing from the tip gives O(n^2).
+// The armature is a constant diagonal inertia: it adds nothing to C.
 void coriolis_matrix(const Model& model, Data& data, const Vector7& q, const Vector7& dq) {
   forward_kinematics(model, data, q);
   detail::update_base_inertias(model, data);

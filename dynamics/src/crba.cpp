@@ -32,6 +32,8 @@ void crba(const Model& model, Data& data, const Vector7& q) {
       composite += model.body(i - 1);
     }
   }
+  // The rotors add their reflected inertia on the diagonal: M + diag(I_a) (Featherstone sec. 7.3).
+  data.mass_matrix.diagonal() += model.armature();
 }
 
 }  // namespace csp

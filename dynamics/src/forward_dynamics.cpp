@@ -22,7 +22,7 @@ void aba(const Model& model, Data& data, const Vector7& q, const Vector7& dq, co
   for (int i = kNumJoints - 1; i >= 0; --i) {
     const Vector6& S = data.axis[i];
     data.U[i] = data.articulated[i] * S;
-    data.D[i] = S.dot(data.U[i]);
+    data.D[i] = model.armature()[i] + S.dot(data.U[i]);   // the rotor's inertia adds to D (RBDA sec. 7.3)
     data.u[i] = tau[i] - S.dot(data.bias_force[i]);
     if (i > 0) {
       // I^a = I^A - U U^T / D and p^a = p^A + I^a c + U u / D, handed to the parent.
@@ -47,13 +47,19 @@ void aba(const Model& model, Data& data, const Vector7& q, const Vector7& dq, co
   aba(model, data, q, dq, tau, kNoLinkWrenches);
 }
 
+// M ddq = tau - b with the bias b = c + g - sum J^T f_ext: the inverse dynamics at ddq = 0.
 void forward_dynamics_cholesky(const Model& model, Data& data, const Vector7& q, const Vector7& dq,
-                               const Vector7& tau) {
+                               const Vector7& tau, const LinkWrenches& f_ext) {
   crba(model, data, q);
   Vector7 bias;
-  rnea(model, data, q, dq, Vector7::Zero(), bias);
+  rnea(model, data, q, dq, Vector7::Zero(), f_ext, bias);
   data.mass_cholesky.compute(data.mass_matrix);
   data.ddq = data.mass_cholesky.solve(tau - bias);
+}
+
+void forward_dynamics_cholesky(const Model& model, Data& data, const Vector7& q, const Vector7& dq,
+                               const Vector7& tau) {
+  forward_dynamics_cholesky(model, data, q, dq, tau, kNoLinkWrenches);
 }
 
 }  // namespace csp

@@ -45,6 +45,8 @@ Model::Model(const ModelParameters& parameters) : parameters_(parameters) {
   check_flange_body(parameters_.end_effector, "end effector");
   check_flange_body(parameters_.load, "load");
   if (!parameters_.gravity.allFinite()) throw std::invalid_argument("gravity must be finite");
+  if (!parameters_.armature.allFinite() || (parameters_.armature.array() < 0.0).any())
+    throw std::invalid_argument("armature: expected 7 finite non-negative rotor inertias [kg m^2]");
   total_flange_load_ = combine(parameters_.end_effector, parameters_.load);
   for (int i = 0; i < kNumJoints; ++i) {
     joints_[i] = joint_geometry(parameters_.joints[i]);

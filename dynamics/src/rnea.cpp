@@ -61,10 +61,12 @@ void newton_euler(const Model& model, Data& data, const Vector7& q, const Vector
 void rnea(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq,
           const LinkWrenches& f_ext, Vector7& tau) {
   newton_euler(model, data, q, dq, ddq, model.gravity(), f_ext, tau);
+  // Each rotor, spinning about its joint axis, needs I_a,i ddq_i more (Featherstone sec. 7.3).
+  tau += model.armature().cwiseProduct(ddq);
 }
 
 void rnea(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq, Vector7& tau) {
-  newton_euler(model, data, q, dq, ddq, model.gravity(), kNoLinkWrenches, tau);
+  rnea(model, data, q, dq, ddq, kNoLinkWrenches, tau);
 }
 
 // At rest only gravity acts (w = dw = 0): each link's net wrench is its weight, m dv and h x dv.

@@ -74,9 +74,11 @@ class MotionRunner {
  private:
   [[noreturn]] void fail(const std::string& reason) {
     const std::exception_ptr error = std::current_exception();
-    // The robot gets no command this cycle and reacts with a braking reflex.
-    emulator_.abort_motion(reason);
-    step(std::nullopt, false);
+    // This cycle's input says that the controller failed: the robot's command intake ends the
+    // motion in a braking reflex, and the observer sees the cycle like any other (nothing sent).
+    emulator_.step(CycleInput::controller_failed(reason));
+    ++report_.cycles;
+    if (options_.observer) options_.observer(emulator_.state(), CycleInfo{});
     std::rethrow_exception(error);
   }
 

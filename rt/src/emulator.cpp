@@ -42,32 +42,43 @@ CollisionBehavior default_collision_behavior() {
 
 Vector7 default_joint_stiffness() { return (Vector7() << 3000, 3000, 3000, 2500, 2500, 2000, 2000).finished(); }
 
+namespace {
+// Why the robot refuses a command that is not finite (reflex_reason()).
+std::string not_finite_reason(ControlMode mode, const Vector7& values) {
+  std::ostringstream what;
+  what << "the " << control_mode_name(mode) << " command is not finite (" << values.transpose() << ")";
+  return what.str();
+}
+}  // namespace
+
 Emulator::Emulator(const EmulatorSettings& settings)
     : settings_(settings),
       internal_parameters_(settings.internal),
       plant_(settings.plant),
-      internal_(settings.internal),
-      noise_rng_(settings.seed) {
+      internal_(settings.internal) {
   if (settings_.substeps < 1) throw std::invalid_argument("substeps: expected at least 1");
   F_T_NE_ = internal_parameters_.F_T_EE;
-  q_ = settings_.q_initial;
-  dq_.setZero();
-  ddq_.setZero();
-  q_hold_ = q_;
+  PlantState& arm = plant_state_;
+  arm.q = settings_.q_initial;
+  arm.dq.setZero();
+  arm.ddq.setZero();
+  torque_loop_.q_hold = arm.q;
   gravity_compensation_torque();
-  tau_motor_ = gravity_internal_;
-  tau_J_true_ = tau_motor_;
-  q_c_ = q_;
-  dq_c_.setZero();
-  ddq_c_.setZero();
-  last_user_torque_.setZero();
-  dq_previous_.setZero();
-  tau_J_measured_previous_ = tau_J_true_ + settings_.tau_J_bias;   // dtau_J = 0 at rest
-  tau_ext_filtered_.setZero();
+  torque_loop_.tau_motor = torque_loop_.gravity;
+  arm.tau_J = torque_loop_.tau_motor;
+  motion_generator_.q_c = arm.q;
+  motion_generator_.dq_c.setZero();
+  motion_generator_.ddq_c.setZero();
+  reception_.restart();
+  Estimator& e = estimator_;
+  e.noise_rng.seed(settings_.seed);
+  e.dq_previous.setZero();
+  e.tau_J_measured_previous = arm.tau_J + settings_.tau_J_bias;   // dtau_J = 0 at rest
+  e.tau_ext_filtered.setZero();
   state_.robot_mode = RobotMode::kIdle;
   update_sensors_and_estimates();
-  tau_ext_filtered_ = tau_ext_raw_;   // the arm has been standing: the filter has settled
-  tau_J_measured_previous_ = tau_J_measured_;
+  e.tau_ext_filtered = e.tau_ext_raw;   // the arm has been standing: the filter has settled
+  e.tau_J_measured_previous = e.tau_J_measured;
   publish();
 }
 
@@ -124,11 +135,11 @@ void Emulator::automatic_error_recovery() {
   if (phase_ == Phase::kBraking || phase_ == Phase::kBraked) {
     // Brakes open; the robot holds where it stopped, its motors taking the load again.
     phase_ = Phase::kIdle;
-    dq_.setZero();
-    dq_previous_.setZero();   // no phantom deceleration in the next external-torque estimate
-    q_hold_ = q_;
+    plant_state_.dq.setZero();
+    estimator_.dq_previous.setZero();   // no phantom deceleration in the next external-torque estimate
+    torque_loop_.q_hold = plant_state_.q;
     gravity_compensation_torque();
-    tau_motor_ = gravity_internal_;
+    torque_loop_.tau_motor = torque_loop_.gravity;
   }
   state_.robot_mode = RobotMode::kIdle;
   reflex_reason_.clear();
@@ -142,20 +153,12 @@ void Emulator::start_motion(ControlMode mode) {
   mode_ = mode;
   phase_ = Phase::kMove;
   state_.robot_mode = RobotMode::kMove;
-  first_command_ = true;
-  q_c_ = q_hold_;   // a motion starts from the desired position the robot holds (q_d)
-  dq_c_.setZero();
-  ddq_c_.setZero();
-  last_user_torque_.setZero();
-  consecutive_lost_ = 0;
-  received_count_ = 0;
-  received_index_ = 0;
-  received_in_window_ = 0;
-}
-
-void Emulator::abort_motion(const std::string& reason) {
-  if (!mode_) return;
-  enter_reflex(Errors{}, reason);
+  // A motion starts from the desired position the robot holds (q_d), at rest.
+  motion_generator_.q_c = torque_loop_.q_hold;
+  motion_generator_.dq_c.setZero();
+  motion_generator_.ddq_c.setZero();
+  motion_generator_.first_command = true;
+  reception_.restart();
 }
 
 void Emulator::enter_reflex(const Errors& errors, const std::string& reason) {
@@ -172,79 +175,76 @@ void Emulator::enter_reflex(const Errors& errors, const std::string& reason) {
 // ---------------------------------------------------------------------------------------------
 // One cycle
 
-void Emulator::step(const Command* command) {
+// The stages in the robot's order: each reads what the ones before it wrote this cycle.
+void Emulator::step(const CycleInput& input) {
   ++counters_.cycles;
   state_.time += Duration(1);
-  Errors errors;
-  std::string reason;
-
-  const bool moving = phase_ == Phase::kMove;
-  bool received = false;
-  if (moving) {
-    ++counters_.motion_cycles;
-    received = command != nullptr;
-    if (received && !command->values.allFinite()) {
-      std::ostringstream what;
-      what << "the " << control_mode_name(*mode_) << " command is not finite ("
-           << command->values.transpose() << ")";
-      reason = what.str();
-      received = false;
-    }
-    record_reception(received);
-    if (!received && reason.empty()) {
-      ++counters_.lost_commands;
-      counters_.max_consecutive_lost = std::max(counters_.max_consecutive_lost, consecutive_lost_);
-      if (consecutive_lost_ >= kMaxConsecutiveLost) errors.set(Error::communication_constraints_violation);
-    }
-  }
-
-  // Stage 1: the user's torque (without gravity), or the motion generator driving the robot's
-  // joint impedance controller.
-  Vector7 user_torque = Vector7::Zero();
-  if (moving && reason.empty()) {
-    if (*mode_ == ControlMode::kTorque) {
-      user_torque = received ? command->values : last_user_torque_;
-      const Vector7 dtau_max = plant_.parameters().joint_limits.dtau_max;
-      if (((user_torque - last_user_torque_).array().abs() > dtau_max.array() * kDeltaT + kLimitTolerance).any())
-        errors.set(Error::controller_torque_discontinuity);
-      last_user_torque_ = user_torque;
-    } else {
-      errors.merge(run_motion_generator(received ? command : nullptr));
-    }
-  }
-  if (!reason.empty() || errors) {
-    enter_reflex(errors, reason);
-  }
-
-  // Stage 2: inner torque loop and plant.
-  integrate(user_torque);
-
-  // Stage 3: sensors and estimators; then the robot's limit and collision checks.
-  update_sensors_and_estimates();
-  if (phase_ == Phase::kMove) {
-    const Errors violations = check_limits_and_collisions();
-    if (violations) enter_reflex(violations, "");
-  }
-
-  if (phase_ == Phase::kMove && received && command->motion_finished) {
-    // The motion ends; the robot holds the last desired position (torque mode: where it is).
-    q_hold_ = *mode_ == ControlMode::kTorque ? q_ : q_c_;
-    mode_.reset();
-    phase_ = Phase::kIdle;
-    state_.robot_mode = RobotMode::kIdle;
-  }
-  publish();
+  take_command(input);              // reception, refusals, torque or motion-generator setpoint
+  integrate();                      // inner torque loop and plant, `substeps` times
+  update_sensors_and_estimates();   // tau_J, dtau_J, tau_ext_hat_filtered, O_F_ext_hat_K
+  check_limits_and_collisions();    // reflexes of a running motion
+  end_motion_if_finished();         // motion_finished -> Idle
+  publish();                        // the RobotState
 }
 
-void Emulator::record_reception(bool received) {
-  consecutive_lost_ = received ? 0 : consecutive_lost_ + 1;
+// Command intake: what arrived, whether the robot accepts it, and what it makes of it (the user's
+// torque, or the motion generator's next setpoint). A refused command, a failed controller or the
+// 20th lost command in a row end the motion here, before the torque loop runs: the arm brakes in
+// this very cycle, as the FCI does when a cycle's command is missing or invalid.
+void Emulator::take_command(const CycleInput& input) {
+  reception_.finish_requested = false;
+  if (phase_ != Phase::kMove) return;   // no motion runs: nothing is commanded
+  ++counters_.motion_cycles;
+
+  const Command* command = input.kind == CycleInput::Kind::kCommand ? input.command : nullptr;
+  std::string refusal;
+  if (input.kind == CycleInput::Kind::kControllerFailed) refusal = input.failure;
+  else if (command && !command->values.allFinite()) refusal = not_finite_reason(*mode_, command->values);
+  const bool received = command && refusal.empty();
+  reception_.record(received);
+
+  Errors errors;
+  if (!received && refusal.empty()) {   // lost: bridged by the last torque or an extrapolation
+    ++counters_.lost_commands;
+    counters_.max_consecutive_lost = std::max(counters_.max_consecutive_lost, reception_.consecutive_lost);
+    if (reception_.consecutive_lost >= kMaxConsecutiveLost) errors.set(Error::communication_constraints_violation);
+  }
+  if (refusal.empty())
+    errors.merge(*mode_ == ControlMode::kTorque ? accept_torque(received ? command : nullptr)
+                                                : run_motion_generator(received ? command : nullptr));
+  if (!refusal.empty() || errors) enter_reflex(errors, refusal);
+  reception_.finish_requested = received && command->motion_finished;
+}
+
+void Emulator::CommandReception::restart() {
+  last_user_torque.setZero();
+  finish_requested = false;
+  consecutive_lost = 0;
+  index = count = in_window = 0;
+}
+
+void Emulator::CommandReception::record(bool arrived) {
+  consecutive_lost = arrived ? 0 : consecutive_lost + 1;
   // A running count over the window: the slot overwritten leaves it, the new cycle enters.
-  const int window = static_cast<int>(received_.size());
-  if (received_count_ == window && received_[received_index_]) --received_in_window_;
-  received_[received_index_] = received;
-  if (received) ++received_in_window_;
-  received_index_ = (received_index_ + 1) % window;
-  received_count_ = std::min(received_count_ + 1, window);
+  const int window = static_cast<int>(received.size());
+  if (count == window && received[index]) --in_window;
+  received[index] = arrived;
+  if (arrived) ++in_window;
+  index = (index + 1) % window;
+  count = std::min(count + 1, window);
+}
+
+// Torque mode: the user's torque without gravity (tau_J_d); a lost command reuses the last one.
+// Its change per cycle is bounded by dtau_max.
+Errors Emulator::accept_torque(const Command* command) {
+  Errors errors;
+  Vector7& last = reception_.last_user_torque;
+  const Vector7 user_torque = command ? command->values : last;
+  const Vector7 dtau_max = plant_.parameters().joint_limits.dtau_max;
+  if (((user_torque - last).array().abs() > dtau_max.array() * kDeltaT + kLimitTolerance).any())
+    errors.set(Error::controller_torque_discontinuity);
+  last = user_torque;
+  return errors;
 }
 
 // The external joint motion generator: commanded q_c (or dq_c) of this cycle, its finite-difference
@@ -252,26 +252,27 @@ void Emulator::record_reception(bool received) {
 // constant acceleration.
 Errors Emulator::run_motion_generator(const Command* command) {
   const JointLimits& limits = plant_.parameters().joint_limits;
+  MotionGenerator& g = motion_generator_;
   Errors errors;
   Vector7 q_c, dq_c;
   if (!command) {
-    dq_c = dq_c_ + ddq_c_ * kDeltaT;
-    q_c = q_c_ + dq_c * kDeltaT;
+    dq_c = g.dq_c + g.ddq_c * kDeltaT;
+    q_c = g.q_c + dq_c * kDeltaT;
   } else if (*mode_ == ControlMode::kJointPosition) {
     q_c = command->values;
-    if (first_command_ && ((q_c - q_c_).array().abs() > limits.dq_max.array() * kDeltaT).any()) {
+    if (g.first_command && ((q_c - g.q_c).array().abs() > limits.dq_max.array() * kDeltaT).any()) {
       // The robot rejects the start pose itself; the jump is not also a velocity error.
       errors.set(Error::joint_position_motion_generator_start_pose_invalid);
       return errors;
     }
-    dq_c = (q_c - q_c_) / kDeltaT;
+    dq_c = (q_c - g.q_c) / kDeltaT;
   } else {
     dq_c = command->values;
-    q_c = q_c_ + dq_c * kDeltaT;
+    q_c = g.q_c + dq_c * kDeltaT;
   }
-  if (command) first_command_ = false;
-  const Vector7 ddq_c = (dq_c - dq_c_) / kDeltaT;
-  const Vector7 dddq_c = (ddq_c - ddq_c_) / kDeltaT;
+  if (command) g.first_command = false;
+  const Vector7 ddq_c = (dq_c - g.dq_c) / kDeltaT;
+  const Vector7 dddq_c = (ddq_c - g.ddq_c) / kDeltaT;
 
   const Vector7 upper = limits.dq_upper(q_c), lower = limits.dq_lower(q_c);
   for (int i = 0; i < kNumJoints; ++i) {
@@ -284,15 +285,15 @@ Errors Emulator::run_motion_generator(const Command* command) {
     if (std::abs(dddq_c[i]) > limits.dddq_max[i] + kLimitTolerance)
       errors.set(Error::joint_motion_generator_acceleration_discontinuity);
   }
-  q_c_ = q_c;
-  dq_c_ = dq_c;
-  ddq_c_ = ddq_c;
+  g.q_c = q_c;
+  g.dq_c = dq_c;
+  g.ddq_c = ddq_c;
   return errors;
 }
 
 void Emulator::gravity_compensation_torque() {
-  if (settings_.gravity_compensation) gravity_torque(internal_, internal_data_, q_, gravity_internal_);
-  else gravity_internal_.setZero();
+  if (settings_.gravity_compensation) gravity_torque(internal_, internal_data_, plant_state_.q, torque_loop_.gravity);
+  else torque_loop_.gravity.setZero();
 }
 
 // External wrenches of the scenario at time t, as link-frame wrenches about each link origin.
@@ -303,7 +304,7 @@ LinkWrenches Emulator::external_link_wrenches(double t) {
     if (t < w.start || t >= w.end) continue;
     double scale = 1.0;   // linear ramp in and out
     if (w.ramp > 0.0) scale = std::clamp(std::min(t - w.start, w.end - t) / w.ramp, 0.0, 1.0);
-    if (!any) forward_kinematics(plant_, plant_data_, q_);
+    if (!any) forward_kinematics(plant_, plant_data_, plant_state_.q);
     any = true;
     const Matrix3 R = plant_data_.O_T_joint[w.link - 1].rotation;   // base_R_link
     const Vector3 force = R.transpose() * (scale * w.force);
@@ -317,106 +318,115 @@ LinkWrenches Emulator::external_link_wrenches(double t) {
 // The inner torque loop and the plant, integrated with `substeps` semi-implicit (symplectic)
 // Euler steps: velocity first, then position with the new velocity. Its energy error stays
 // bounded instead of drifting (tests/test_emulator.cpp measures it and a step response).
-void Emulator::integrate(const Vector7& user_torque) {
+void Emulator::integrate() {
+  PlantState& arm = plant_state_;
+  TorqueLoop& loop = torque_loop_;
   const LinkWrenches f_ext = external_link_wrenches(state_.time.toSec() - kDeltaT);
   if (phase_ == Phase::kBraked) {
     // Brakes closed: the links stand still and the sensors carry the static load.
-    dq_.setZero();
-    ddq_.setZero();
-    rnea(plant_, plant_data_, q_, dq_, ddq_, f_ext, tau_J_true_);
+    arm.dq.setZero();
+    arm.ddq.setZero();
+    rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, f_ext, arm.tau_J);
     return;
   }
   gravity_compensation_torque();
+  // The torque loop's setpoint: the user's torque (torque mode), the robot's joint impedance (Idle,
+  // motion generators), or a reflex's braking.
   const bool impedance = phase_ == Phase::kIdle || (phase_ == Phase::kMove && *mode_ != ControlMode::kTorque);
   const bool braking = phase_ == Phase::kBraking;
   Vector7 mass_diagonal = Vector7::Zero();
   if (impedance || braking) {
-    crba(internal_, internal_data_, q_);
+    crba(internal_, internal_data_, arm.q);
     mass_diagonal = internal_data_.mass_matrix.diagonal();
   }
   const Vector7& stiffness = settings_.joint_stiffness;
   const Vector7 damping = 2.0 * (stiffness.cwiseProduct(mass_diagonal)).cwiseSqrt();   // critical
-  const Vector7 q_target = phase_ == Phase::kIdle ? q_hold_ : q_c_;
-  const Vector7 dq_target = phase_ == Phase::kIdle ? Vector7::Zero() : dq_c_;
+  const Vector7 q_target = phase_ == Phase::kIdle ? loop.q_hold : motion_generator_.q_c;
+  const Vector7 dq_target = phase_ == Phase::kIdle ? Vector7::Zero() : motion_generator_.dq_c;
 
   const double h = kDeltaT / settings_.substeps;
   const double alpha = lowpass_factor(settings_.torque_loop_bandwidth_hz, h);
-  const Vector7& armature = settings_.armature;
-  Vector7 bias;
   for (int s = 0; s < settings_.substeps; ++s) {
     // The robot's controllers run faster than the FCI: impedance and braking act every substep.
-    Vector7 command = user_torque;
-    if (impedance) command = stiffness.cwiseProduct(q_target - q_) + damping.cwiseProduct(dq_target - dq_);
-    if (braking) command = -mass_diagonal.cwiseProduct(dq_) / kBrakingTimeConstant;
-    tau_motor_ += alpha * (command + gravity_internal_ - tau_motor_);
+    Vector7 setpoint = reception_.last_user_torque;
+    if (impedance) setpoint = stiffness.cwiseProduct(q_target - arm.q) + damping.cwiseProduct(dq_target - arm.dq);
+    if (braking) setpoint = -mass_diagonal.cwiseProduct(arm.dq) / kBrakingTimeConstant;
+    loop.tau_motor += alpha * (setpoint + loop.gravity - loop.tau_motor);
 
-    // (M + armature) ddq = tau_motor - c - g - tau_friction + J^T f_ext
-    crba(plant_, plant_data_, q_);
-    plant_data_.mass_matrix.diagonal() += armature;
-    rnea(plant_, plant_data_, q_, dq_, Vector7::Zero(), f_ext, bias);
-    plant_data_.mass_cholesky.compute(plant_data_.mass_matrix);
-    ddq_ = plant_data_.mass_cholesky.solve(tau_motor_ - bias - friction_torque(plant_.parameters().friction, dq_));
-    dq_ += h * ddq_;
-    q_ += h * dq_;
+    // (M + armature) ddq = tau_motor - tau_friction(dq) - c - g + J^T f_ext
+    const Vector7 tau_link = loop.tau_motor - friction_torque(plant_.parameters().friction, arm.dq);
+    forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, f_ext);
+    arm.ddq = plant_data_.ddq;
+    arm.dq += h * arm.ddq;
+    arm.q += h * arm.dq;
   }
   // The sensor sits between rotor and link: the rotor's own inertia is not felt by it.
-  tau_J_true_ = tau_motor_ - armature.cwiseProduct(ddq_);
+  arm.tau_J = loop.tau_motor - plant_.armature().cwiseProduct(arm.ddq);
 
-  if (braking && ((dq_.array().abs() < kBrakesClosedVelocity).all() ||
+  if (braking && ((arm.dq.array().abs() < kBrakesClosedVelocity).all() ||
                   state_.time.toSec() - braking_since_ >= kMaxBrakingTime - 1e-9)) {
     phase_ = Phase::kBraked;
-    dq_.setZero();
+    arm.dq.setZero();
   }
 }
 
+// Sensors and estimates: the torque sensor (bias, seeded noise), and what the robot's model makes
+// of it: the external torque and the external wrench on K.
 void Emulator::update_sensors_and_estimates() {
-  tau_J_measured_ = tau_J_true_ + settings_.tau_J_bias;
+  Estimator& e = estimator_;
+  const PlantState& arm = plant_state_;
+  e.tau_J_measured = arm.tau_J + settings_.tau_J_bias;
   for (int i = 0; i < kNumJoints; ++i)
-    if (settings_.tau_J_noise[i] > 0.0) tau_J_measured_[i] += settings_.tau_J_noise[i] * unit_normal_(noise_rng_);
+    if (settings_.tau_J_noise[i] > 0.0) e.tau_J_measured[i] += settings_.tau_J_noise[i] * e.unit_normal(e.noise_rng);
 
   // Expected torque of the robot's model along the measured motion (acceleration by finite
   // difference of dq); what it cannot explain is attributed to external forces.
-  const Vector7 ddq_estimate = (dq_ - dq_previous_) / kDeltaT;
+  const Vector7 ddq_estimate = (arm.dq - e.dq_previous) / kDeltaT;
   Vector7 expected;
-  rnea(internal_, internal_data_, q_, dq_, ddq_estimate, expected);
-  tau_ext_raw_ = tau_J_measured_ - expected;
-  tau_ext_filtered_ += lowpass_factor(settings_.tau_ext_cutoff_hz, kDeltaT) * (tau_ext_raw_ - tau_ext_filtered_);
-  dtau_J_ = (tau_J_measured_ - tau_J_measured_previous_) / kDeltaT;
-  tau_J_measured_previous_ = tau_J_measured_;
-  dq_previous_ = dq_;
+  rnea(internal_, internal_data_, arm.q, arm.dq, ddq_estimate, expected);
+  e.tau_ext_raw = e.tau_J_measured - expected;
+  e.tau_ext_filtered += lowpass_factor(settings_.tau_ext_cutoff_hz, kDeltaT) * (e.tau_ext_raw - e.tau_ext_filtered);
+  e.dtau_J = (e.tau_J_measured - e.tau_J_measured_previous) / kDeltaT;
+  e.tau_J_measured_previous = e.tau_J_measured;
+  e.dq_previous = arm.dq;
 
   // External wrench on K: O_F = (J J^T + lambda^2 1)^-1 J tau_ext (damped pseudo-inverse of J^T).
   // Sign as libfranka's: the wrench the robot exerts on its environment (libfranka issue #26).
-  forward_kinematics(internal_, internal_data_, q_);
-  zero_jacobian(internal_data_, Frame::kStiffness, jacobian_);
-  const Matrix6 JJt = jacobian_ * jacobian_.transpose() + kWrenchDamping * kWrenchDamping * Matrix6::Identity();
-  O_F_ext_ = JJt.ldlt().solve(jacobian_ * tau_ext_filtered_);
+  forward_kinematics(internal_, internal_data_, arm.q);
+  zero_jacobian(internal_data_, Frame::kStiffness, e.jacobian);
+  const Matrix6 JJt = e.jacobian * e.jacobian.transpose() + kWrenchDamping * kWrenchDamping * Matrix6::Identity();
+  e.O_F_ext = JJt.ldlt().solve(e.jacobian * e.tau_ext_filtered);
   const Matrix3 R = internal_data_.O_T_K.rotation;
-  K_F_ext_ << R.transpose() * O_F_ext_.head<3>(), R.transpose() * O_F_ext_.tail<3>();
+  e.K_F_ext << R.transpose() * e.O_F_ext.head<3>(), R.transpose() * e.O_F_ext.tail<3>();
 }
 
-Errors Emulator::check_limits_and_collisions() {
+// The robot's limit and collision checks of a running motion; a violation ends it in a reflex.
+void Emulator::check_limits_and_collisions() {
+  if (phase_ != Phase::kMove) return;
   const JointLimits& limits = plant_.parameters().joint_limits;
+  const PlantState& arm = plant_state_;
+  const Estimator& e = estimator_;
   Errors errors;
-  const Vector7 upper = limits.dq_upper(q_), lower = limits.dq_lower(q_);
+  const Vector7 upper = limits.dq_upper(arm.q), lower = limits.dq_lower(arm.q);
   double power = 0.0;
   for (int i = 0; i < kNumJoints; ++i) {
-    if (q_[i] > limits.q_max[i] || q_[i] < limits.q_min[i]) errors.set(Error::joint_position_limits_violation);
-    if (dq_[i] > upper[i] || dq_[i] < lower[i]) errors.set(Error::joint_velocity_violation);
-    if (std::abs(tau_J_measured_[i]) > limits.tau_max[i]) errors.set(Error::tau_j_range_violation);
-    power += std::max(0.0, tau_J_true_[i] * dq_[i]);
+    if (arm.q[i] > limits.q_max[i] || arm.q[i] < limits.q_min[i]) errors.set(Error::joint_position_limits_violation);
+    if (arm.dq[i] > upper[i] || arm.dq[i] < lower[i]) errors.set(Error::joint_velocity_violation);
+    if (std::abs(e.tau_J_measured[i]) > limits.tau_max[i]) errors.set(Error::tau_j_range_violation);
+    power += std::max(0.0, arm.tau_J[i] * arm.dq[i]);
   }
   if (power > settings_.power_limit) errors.set(Error::power_limit_violation);
 
   // Contact and collision levels (setCollisionBehavior); collisions latch until recovery.
   const CollisionBehavior& c = settings_.collision;
-  const bool accelerating = *mode_ != ControlMode::kTorque && (ddq_c_.array().abs() > kAccelerationThreshold).any();
+  const bool accelerating =
+      *mode_ != ControlMode::kTorque && (motion_generator_.ddq_c.array().abs() > kAccelerationThreshold).any();
   const Vector7& torque_lower = accelerating ? c.lower_torque_acceleration : c.lower_torque_nominal;
   const Vector7& torque_upper = accelerating ? c.upper_torque_acceleration : c.upper_torque_nominal;
   const Vector6& force_lower = accelerating ? c.lower_force_acceleration : c.lower_force_nominal;
   const Vector6& force_upper = accelerating ? c.upper_force_acceleration : c.upper_force_nominal;
   for (int i = 0; i < kNumJoints; ++i) {
-    const double magnitude = std::abs(tau_ext_filtered_[i]);
+    const double magnitude = std::abs(e.tau_ext_filtered[i]);
     state_.joint_contact[i] = magnitude > torque_lower[i] ? 1.0 : 0.0;
     if (magnitude > torque_upper[i]) {
       state_.joint_collision[i] = 1.0;
@@ -424,14 +434,24 @@ Errors Emulator::check_limits_and_collisions() {
     }
   }
   for (int j = 0; j < 6; ++j) {
-    const double magnitude = std::abs(K_F_ext_[j]);
+    const double magnitude = std::abs(e.K_F_ext[j]);
     state_.cartesian_contact[j] = magnitude > force_lower[j] ? 1.0 : 0.0;
     if (magnitude > force_upper[j]) {
       state_.cartesian_collision[j] = 1.0;
       errors.set(Error::cartesian_reflex);
     }
   }
-  return errors;
+  if (errors) enter_reflex(errors, "");
+}
+
+// A command with motion_finished ends the motion; the robot then holds the last desired position
+// (torque mode: where the arm is).
+void Emulator::end_motion_if_finished() {
+  if (phase_ != Phase::kMove || !reception_.finish_requested) return;
+  torque_loop_.q_hold = *mode_ == ControlMode::kTorque ? plant_state_.q : motion_generator_.q_c;
+  mode_.reset();
+  phase_ = Phase::kIdle;
+  state_.robot_mode = RobotMode::kIdle;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -440,23 +460,26 @@ Errors Emulator::check_limits_and_collisions() {
 void Emulator::publish() {
   RobotState& s = state_;
   const ModelParameters& p = internal_.parameters();
+  const PlantState& arm = plant_state_;
+  const MotionGenerator& g = motion_generator_;
+  const Estimator& e = estimator_;
   const bool motion_generator = mode_ && *mode_ != ControlMode::kTorque;
-  const Vector7 q_d = motion_generator ? q_c_ : (phase_ == Phase::kIdle ? q_hold_ : q_);
+  const Vector7 q_d = motion_generator ? g.q_c : (phase_ == Phase::kIdle ? torque_loop_.q_hold : arm.q);
 
-  assign(s.q, q_);
-  assign(s.dq, dq_);
+  assign(s.q, arm.q);
+  assign(s.dq, arm.dq);
   assign(s.q_d, q_d);
-  assign(s.dq_d, motion_generator ? dq_c_ : Vector7::Zero());
-  assign(s.ddq_d, motion_generator ? ddq_c_ : Vector7::Zero());
-  assign(s.theta, q_);   // rigid gears: motor position reported on the link side
-  assign(s.dtheta, dq_);
-  assign(s.tau_J, tau_J_measured_);
-  assign(s.dtau_J, dtau_J_);
-  assign(s.tau_J_d, mode_ == ControlMode::kTorque ? last_user_torque_ : Vector7::Zero());
-  assign(s.tau_ext_hat_filtered, tau_ext_filtered_);
-  assign(s.O_F_ext_hat_K, O_F_ext_);
-  assign(s.K_F_ext_hat_K, K_F_ext_);
-  s.elbow = {q_[2], q_[3] < 0.0 ? -1.0 : 1.0};
+  assign(s.dq_d, motion_generator ? g.dq_c : Vector7::Zero());
+  assign(s.ddq_d, motion_generator ? g.ddq_c : Vector7::Zero());
+  assign(s.theta, arm.q);   // rigid gears: motor position reported on the link side
+  assign(s.dtheta, arm.dq);
+  assign(s.tau_J, e.tau_J_measured);
+  assign(s.dtau_J, e.dtau_J);
+  assign(s.tau_J_d, mode_ == ControlMode::kTorque ? reception_.last_user_torque : Vector7::Zero());
+  assign(s.tau_ext_hat_filtered, e.tau_ext_filtered);
+  assign(s.O_F_ext_hat_K, e.O_F_ext);
+  assign(s.K_F_ext_hat_K, e.K_F_ext);
+  s.elbow = {arm.q[2], arm.q[3] < 0.0 ? -1.0 : 1.0};
   s.elbow_d = s.elbow_c = {q_d[2], q_d[3] < 0.0 ? -1.0 : 1.0};
 
   // Kinematics of the robot's model (forward_kinematics at q ran in the estimator).
@@ -470,12 +493,27 @@ void Emulator::publish() {
   s.O_T_EE_c = s.O_T_EE_d;
   assign(s.O_ddP_O, Vector3(-p.gravity));
 
+  // The motion generator's rates as the robot reports them (zero in torque mode, as libfranka's):
+  // the EE twist J(q_c) dq_c, the EE acceleration J ddq_c + dJ/dt dq_c, the elbow's joint-3 rates.
+  Vector6 O_dP_EE = Vector6::Zero(), O_ddP_EE = Vector6::Zero();
+  if (motion_generator) {
+    Matrix6x7 J, dJ;
+    zero_jacobian(internal_data_, Frame::kEndEffector, J);
+    zero_jacobian_time_derivative(internal_data_, Frame::kEndEffector, g.dq_c, dJ);
+    O_dP_EE = J * g.dq_c;
+    O_ddP_EE = J * g.ddq_c + dJ * g.dq_c;
+  }
+  assign(s.O_dP_EE_d, O_dP_EE);
+  s.O_dP_EE_c = s.O_dP_EE_d;
+  assign(s.O_ddP_EE_c, O_ddP_EE);
+  s.delbow_c = {motion_generator ? g.dq_c[2] : 0.0, 0.0};
+  s.ddelbow_c = {motion_generator ? g.ddq_c[2] : 0.0, 0.0};
+
   assign_inertia(p.end_effector, s.m_ee, s.F_x_Cee, s.I_ee);
   assign_inertia(p.load, s.m_load, s.F_x_Cload, s.I_load);
   assign_inertia(internal_.total_flange_load(), s.m_total, s.F_x_Ctotal, s.I_total);
 
-  s.control_command_success_rate =
-      mode_ && received_count_ > 0 ? static_cast<double>(received_in_window_) / received_count_ : 0.0;
+  s.control_command_success_rate = mode_ ? reception_.success_rate() : 0.0;
 }
 
 }  // namespace csp::rt

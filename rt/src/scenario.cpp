@@ -193,7 +193,7 @@ Scenario load_scenario(const std::string& path) {
     const Field a = plant["armature"];
     a.allow_only({"values", "source"});
     a["source"].text();   // every number carries its source
-    s.emulator.armature = non_negative7(a["values"]);
+    s.emulator.plant.armature = non_negative7(a["values"]);
   }
 
   // The robot's own model: the plant's sets unless named; it is told the plant's load unless told otherwise.

@@ -85,11 +85,9 @@ void Robot::run(ControlMode mode, const std::function<Command(const RobotState&,
   const csp::rt::Controller controller = [&](const RobotState& state, franka::Duration period) {
     Command command = callback(state, period);
     std::array<double, 7>& values = values_of(command);
-    if (!all_finite(values)) {
-      // libfranka refuses the value before sending it; the robot stops the motion it was running.
-      emulator_.abort_motion("the controller commanded an infinite or NaN value");
-      throw CommandException("libfranka: Commanding value is infinite or NaN.");
-    }
+    // libfranka refuses the value before sending it; the loop then tells the robot that the
+    // controller failed, and the robot stops the motion in a reflex.
+    if (!all_finite(values)) throw CommandException("libfranka: Commanding value is infinite or NaN.");
     values = shape(mode, values, state, limit_rate, cutoff_frequency);
     return csp::rt::Command{from_array<csp::Vector7>(values), command.motion_finished};
   };

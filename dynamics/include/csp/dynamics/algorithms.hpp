@@ -19,7 +19,7 @@ void body_jacobian(const Data& data, Frame frame, Matrix6x7& jacobian);
 void zero_jacobian_time_derivative(const Data& data, Frame frame, const Vector7& dq, Matrix6x7& jacobian_dot);
 
 // Recursive Newton-Euler (Craig eqs. 6.45-6.53; the seed paper's eqs. 5-9):
-// tau = M(q) ddq + C(q,dq) dq + g(q) - sum_i J_i^T f_ext_i, with the model's gravity.
+// tau = (M(q) + diag(armature)) ddq + C(q,dq) dq + g(q) - sum_i J_i^T f_ext_i, with the model's gravity.
 void rnea(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq, Vector7& tau);
 void rnea(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq,
           const LinkWrenches& f_ext, Vector7& tau);
@@ -28,19 +28,23 @@ void gravity_torque(const Model& model, Data& data, const Vector7& q, Vector7& g
 // C(q,dq) dq (no gravity).
 void coriolis_torque(const Model& model, Data& data, const Vector7& q, const Vector7& dq, Vector7& c);
 
-// Mass matrix by the composite-rigid-body algorithm (Featherstone Table 6.2) -> data.mass_matrix.
+// Mass matrix by the composite-rigid-body algorithm (Featherstone Table 6.2), plus the armature on
+// the diagonal -> data.mass_matrix.
 void crba(const Model& model, Data& data, const Vector7& q);
 
 // Coriolis matrix C(q,dq) with dM/dt - 2C skew-symmetric (Echeandia & Wensing 2021) -> data.coriolis_matrix.
 void coriolis_matrix(const Model& model, Data& data, const Vector7& q, const Vector7& dq);
 
-// Forward dynamics ddq = M^-1 (tau - c - g + sum J^T f_ext) -> data.ddq.
+// Forward dynamics ddq = (M + diag(armature))^-1 (tau - c - g + sum J^T f_ext) -> data.ddq.
 // Articulated-body algorithm (Featherstone Table 7.1, in base coordinates):
 void aba(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& tau);
 void aba(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& tau,
          const LinkWrenches& f_ext);
-// The same through the Cholesky factor of M (crba + rnea bias), used to cross-check aba.
+// The same through the Cholesky factor of M (crba + rnea bias): cross-checks aba, and is the
+// emulator's plant step.
 void forward_dynamics_cholesky(const Model& model, Data& data, const Vector7& q, const Vector7& dq,
                                const Vector7& tau);
+void forward_dynamics_cholesky(const Model& model, Data& data, const Vector7& q, const Vector7& dq,
+                               const Vector7& tau, const LinkWrenches& f_ext);
 
 }  // namespace csp

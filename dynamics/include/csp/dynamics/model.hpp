@@ -89,6 +89,8 @@ struct ModelParameters {
   RigidBodyInertia end_effector;                      // m_ee, F_x_Cee, I_ee (flange frame)
   RigidBodyInertia load;                              // m_load, F_x_Cload, I_load (flange frame)
   Vector3 gravity{0.0, 0.0, -9.81};                   // base frame [m/s^2] (libfranka gravity_earth)
+  Vector7 armature = Vector7::Zero();                 // rotor inertia reflected to the link, I_a,i [kg m^2]
+                                                      // (Pinocchio model.armature; Featherstone sec. 7.3)
   FrictionModel friction;
   JointLimits joint_limits;
   CartesianLimits cartesian_limits;
@@ -102,6 +104,7 @@ class Model {
   const ModelParameters& parameters() const { return parameters_; }
   const JointGeometry& joint(int i) const { return joints_[i]; }
   const Vector3& gravity() const { return parameters_.gravity; }
+  const Vector7& armature() const { return parameters_.armature; }
 
   // Spatial inertia of body i in its link frame, with end effector and load lumped on link 7
   // (what libfranka's set_load does to the dynamics).

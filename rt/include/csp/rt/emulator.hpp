@@ -1,7 +1,8 @@
 // The emulated robot: one Franka Control Interface cycle per step(), at 1 kHz. Stages run in a
-// fixed order each cycle (DESIGN.md): read the command -> motion generator and torque command
-// -> inner torque loop and plant integration (substeps) -> sensors and estimators -> limit and
-// reflex checks -> publish the RobotState.
+// fixed order each cycle (DESIGN.md; MuJoCo's mj_step is the model): command intake (reception,
+// refusals, the torque or the motion generator's setpoint) -> inner torque loop and plant
+// integration (substeps) -> sensors and estimators -> limit and reflex checks -> end of motion ->
+// publish the RobotState. docs/emulator.md describes each stage.
 //
 // Two models: the plant (what the arm really is: inertia, link-side friction, armature, load,
 // external wrenches) and the robot's internal model (what its firmware believes: gravity
@@ -14,6 +15,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "csp/dynamics/algorithms.hpp"
@@ -31,6 +33,20 @@ const char* control_mode_name(ControlMode mode);
 struct Command {
   Vector7 values = Vector7::Zero();
   bool motion_finished = false;
+};
+
+// What reaches the robot in one cycle (the input of Emulator::step): a command; none, because it
+// was lost on the network or came too late; or word that the controller failed (it threw, or
+// returned a value libfranka refuses) and sends no more. The robot's command intake handles all three.
+struct CycleInput {
+  enum class Kind { kCommand, kLost, kControllerFailed };
+  Kind kind = Kind::kLost;
+  const Command* command = nullptr;   // kCommand: the command, valid during step()
+  std::string_view failure;           // kControllerFailed: why (becomes reflex_reason())
+
+  static CycleInput received(const Command& command) { return {Kind::kCommand, &command, {}}; }
+  static CycleInput lost() { return {}; }
+  static CycleInput controller_failed(std::string_view why) { return {Kind::kControllerFailed, nullptr, why}; }
 };
 
 // Robot::setCollisionBehavior: contact (lower) and collision (upper) thresholds on the estimated
@@ -56,9 +72,8 @@ struct ExternalWrench {
 };
 
 struct EmulatorSettings {
-  ModelParameters plant;                 // the arm (inertia, friction, load, limits, gravity)
+  ModelParameters plant;                 // the arm (inertia, friction, armature, load, limits, gravity)
   ModelParameters internal;              // the robot's own model (may use another inertial set)
-  Vector7 armature = Vector7::Zero();    // rotor inertia the torque loop does not hide [kg m^2]
   Vector7 q_initial = Vector7::Zero();   // the arm starts at rest here, in Idle
   int substeps = 2;                      // plant integration steps per 1 ms cycle
   double torque_loop_bandwidth_hz = 300.0;   // first-order inner torque loop
@@ -103,11 +118,11 @@ class Emulator {
 
   // Motions, like the FCI: start (Idle -> Move), one step per 1 ms cycle, finish (-> Idle).
   void start_motion(ControlMode mode);
-  // One cycle. `command` is null when no command arrived in time (lost): the last torque is
-  // reused, a motion generator is extrapolated; 20 in a row end the motion in a reflex.
-  void step(const Command* command);
-  // The controller failed (threw, or the motion was aborted): brake to standstill in Reflex.
-  void abort_motion(const std::string& reason);
+  // One cycle. A lost command reuses the last torque or extrapolates the motion generator; 20 in
+  // a row end the motion in a reflex. A non-finite command or a failed controller end it at once.
+  void step(const CycleInput& input);
+  // The same with the command that arrived in time, or null when none did (lost).
+  void step(const Command* command) { step(command ? CycleInput::received(*command) : CycleInput::lost()); }
 
   // Configuration between motions (Robot::set...); InvalidOperation during a motion.
   void set_collision_behavior(const CollisionBehavior& behavior);
@@ -125,44 +140,84 @@ class Emulator {
   // decelerates the arm. Braked: standstill on closed brakes until error recovery.
   enum class Phase { kIdle, kMove, kBraking, kBraked };
 
-  void rebuild_internal_model();
-  void require_no_motion(const char* operation) const;
-  void record_reception(bool received);
+  // The arm as it really moves (the plant's state).
+  struct PlantState {
+    Vector7 q, dq, ddq;
+    Vector7 tau_J;   // the true link-side torque, before the sensor's bias and noise
+  };
+  // The robot's inner torque loop and the joint controllers around it.
+  struct TorqueLoop {
+    Vector7 tau_motor;   // motor torque, a first-order lag behind its setpoint
+    Vector7 gravity;     // gravity compensation by the robot's model, g(q)
+    Vector7 q_hold;      // the position Idle holds (q_d)
+  };
+  // The external motion generator as the robot sees it: the commanded joint trajectory.
+  struct MotionGenerator {
+    Vector7 q_c, dq_c, ddq_c;
+    bool first_command = true;
+  };
+  // What arrived from the controller, and the robot's memory of it.
+  struct CommandReception {
+    Vector7 last_user_torque;      // torque mode: the last torque received (tau_J_d)
+    bool finish_requested = false; // this cycle's command ends the motion (motion_finished)
+    int consecutive_lost = 0;
+    std::array<bool, 100> received{};   // the last 100 cycles (control_command_success_rate)
+    int index = 0, count = 0, in_window = 0;
+
+    void restart();
+    void record(bool arrived);
+    double success_rate() const { return count > 0 ? static_cast<double>(in_window) / count : 0.0; }
+  };
+  // The robot's sensors and the estimates it derives from them.
+  struct Estimator {
+    Vector7 tau_J_measured, tau_J_measured_previous, dtau_J, dq_previous, tau_ext_raw, tau_ext_filtered;
+    Matrix6x7 jacobian;   // K frame, robot's model
+    Vector6 O_F_ext, K_F_ext;
+    std::mt19937_64 noise_rng;
+    std::normal_distribution<double> unit_normal{0.0, 1.0};
+  };
+
+  // The stages of one cycle, in order.
+  void take_command(const CycleInput& input);
+  void integrate();
+  void update_sensors_and_estimates();
+  void check_limits_and_collisions();
+  void end_motion_if_finished();
+  void publish();
+
+  // Parts of the stages.
+  Errors accept_torque(const Command* command);
   Errors run_motion_generator(const Command* command);
   void gravity_compensation_torque();
   LinkWrenches external_link_wrenches(double t);
-  void integrate(const Vector7& user_torque);
-  void update_sensors_and_estimates();
-  Errors check_limits_and_collisions();
   void enter_reflex(const Errors& errors, const std::string& reason);
-  void publish();
 
+  void rebuild_internal_model();
+  void require_no_motion(const char* operation) const;
+
+  // Configuration and models
   EmulatorSettings settings_;
   ModelParameters internal_parameters_;   // the robot's model before setEE (setLoad and setK change it)
   Model plant_, internal_;
   Data plant_data_, internal_data_;
   Transform F_T_NE_, NE_T_EE_;   // configured end effector, and setEE on top of it
-  RobotState state_;
-  EmulatorCounters counters_;
+
+  // The robot's state machine
   std::optional<ControlMode> mode_;
   Phase phase_ = Phase::kIdle;
   std::string reflex_reason_;
   double braking_since_ = 0.0;   // [s] when the last reflex began
 
-  // Plant and inner torque loop
-  Vector7 q_, dq_, ddq_, q_hold_, gravity_internal_, tau_motor_, tau_J_true_;
-  // Motion generator and command reception
-  Vector7 q_c_, dq_c_, ddq_c_, last_user_torque_;
-  bool first_command_ = true;
-  int consecutive_lost_ = 0;
-  std::array<bool, 100> received_{};   // the last 100 cycles (control_command_success_rate)
-  int received_index_ = 0, received_count_ = 0, received_in_window_ = 0;
-  // Sensors and estimators
-  Vector7 tau_J_measured_, tau_J_measured_previous_, dtau_J_, dq_previous_, tau_ext_raw_, tau_ext_filtered_;
-  Matrix6x7 jacobian_;
-  Vector6 O_F_ext_, K_F_ext_;
-  std::mt19937_64 noise_rng_;
-  std::normal_distribution<double> unit_normal_{0.0, 1.0};
+  // The stages' state
+  PlantState plant_state_;
+  TorqueLoop torque_loop_;
+  MotionGenerator motion_generator_;
+  CommandReception reception_;
+  Estimator estimator_;
+
+  // Outputs
+  RobotState state_;
+  EmulatorCounters counters_;
 };
 
 }  // namespace csp::rt
