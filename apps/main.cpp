@@ -1,5 +1,7 @@
 // csp: the Cobot Simulator Platform command line.
+#include <charconv>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -9,15 +11,22 @@
 
 namespace {
 
-// An empty value never means "the default" (`--inertia ''` would silently pick the file's
-// default set): the first option given an empty string, in any parsed (sub)command.
-const CLI::Option* option_with_empty_value(const CLI::App& command) {
+// Values CLI11 would take silently: an empty string (`--inertia ''` would pick the file's default
+// set) and a whole number beyond 64 bits (CLI11 clamps it to INT64_MAX). Returns the first such
+// option of any parsed (sub)command with what was expected, or nothing.
+std::optional<std::string> option_problem(const CLI::App& command) {
   for (const CLI::Option* option : command.get_options())
-    for (const std::string& value : option->results())
-      if (value.empty()) return option;
+    for (const std::string& value : option->results()) {
+      if (value.empty()) return option->get_name() + ": expected a value, got an empty string";
+      const bool whole = value.find_first_not_of("+-0123456789") == std::string::npos && value.find_first_of("0123456789") != std::string::npos;
+      long long parsed = 0;
+      const char* begin = value.data() + (value[0] == '+' ? 1 : 0);
+      if (whole && std::from_chars(begin, value.data() + value.size(), parsed).ec == std::errc::result_out_of_range)
+        return option->get_name() + ": `" + value + "` is out of range (expected a whole number of at most 64 bits)";
+    }
   for (const CLI::App* sub : command.get_subcommands())
-    if (const CLI::Option* option = option_with_empty_value(*sub)) return option;
-  return nullptr;
+    if (std::optional<std::string> problem = option_problem(*sub)) return problem;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -62,8 +71,8 @@ int main(int argc, char** argv) {
     std::cerr << "csp: " << e.what() << " (see csp --help)\n";
     return 2;
   }
-  if (const CLI::Option* empty = option_with_empty_value(app)) {
-    std::cerr << "csp: " << empty->get_name() << ": expected a value, got an empty string (see csp --help)\n";
+  if (const std::optional<std::string> problem = option_problem(app)) {
+    std::cerr << "csp: " << *problem << " (see csp --help)\n";
     return 2;
   }
 

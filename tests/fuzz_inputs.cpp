@@ -4,7 +4,7 @@
 // hang. In-process classes run in this process (a crash kills it: the input being run is saved
 // first to fuzz-<class>.input); the CLI class runs the `csp` program.
 //
-//   csp_fuzz --class robot_yaml|scenario_yaml|lcm_log|lcm_messages|cli|all --budget N [--seed S]
+//   csp_fuzz --class robot_yaml|scenario_yaml|csv_log|lcm_log|lcm_messages|cli|all --budget N [--seed S]
 //
 // Exit code 0 when every input was accepted or rejected clearly; 1 otherwise (the first inputs of
 // each bad kind are printed).
@@ -34,8 +34,10 @@
 #include "csp/bridge/replay.hpp"
 #include "csp/bridge/server.hpp"
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/io/joint_log.hpp"
 #include "csp/io/robot_config.hpp"
 #include "csp/rt/controllers.hpp"
+#include "csp/rt/csv_log.hpp"
 #include "csp/rt/scenario.hpp"
 
 extern char** environ;
@@ -243,6 +245,43 @@ Class scenario_yaml() {
               return rejection(e.what(), "");
             } catch (const std::exception& e) {
               return {Outcome::kUnclear, std::string("not a ConfigError: ") + e.what()};
+            }
+          }};
+}
+
+// Joint logs: the real Panda log's first rows, and the emulator's full column set.
+Class csv_log() {
+  std::vector<std::string> bases;
+  {
+    std::ifstream in(std::string(CSP_SHARED_DATA_DIR) + "/real/panda_exciting_traj_1.csv");
+    std::string text, line;
+    for (int k = 0; k < 40 && std::getline(in, line); ++k) text += line + '\n';
+    bases.push_back(text);
+  }
+  {
+    const std::string path = temp_dir() + "/emulated.csv";
+    const rt::Scenario scenario = rt::load_scenario(rt::default_scenario_path());
+    rt::Emulator emulator(scenario.emulator);
+    {
+      rt::CsvLog log(path);   // written out when it closes
+      for (int k = 0; k < 30; ++k) {
+        emulator.step(nullptr);
+        log.write(emulator.state(), rt::CycleInfo{});
+      }
+    }
+    bases.push_back(read_text(path));
+  }
+  return {"csv_log", [bases](Mutator& m) { return m.text(m.pick(bases)); },
+          [](const std::string& input) -> Verdict {
+            const std::string path = temp_dir() + "/fuzz.csv";
+            write_text(path, input);
+            try {
+              read_joint_log_csv(path);
+              return {};
+            } catch (const JointLogError& e) {
+              return rejection(e.what(), path);
+            } catch (const std::exception& e) {
+              return {Outcome::kUnclear, std::string("not a JointLogError: ") + e.what()};
             }
           }};
 }
@@ -520,7 +559,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const std::vector<std::function<Class()>> makers = {robot_yaml, scenario_yaml, lcm_log, lcm_messages, cli};
+  const std::vector<std::function<Class()>> makers = {robot_yaml, scenario_yaml, csv_log, lcm_log, lcm_messages, cli};
   int failed = 0, ran = 0;
   for (const auto& make : makers) {
     const Class c = make();

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/io/joint_log.hpp"
 #include "csp/io/robot_config.hpp"
 
 namespace csp::test {
@@ -115,6 +116,16 @@ inline const std::filesystem::path& temp_dir() {
   };
   static const Directory directory;
   return directory.path;
+}
+
+// The message of reading a joint log that must fail, or "no error".
+inline std::string joint_log_error(const std::string& path) {
+  try {
+    read_joint_log_csv(path);
+  } catch (const JointLogError& e) {
+    return e.what();
+  }
+  return "no error";
 }
 
 }  // namespace csp::test

@@ -369,6 +369,8 @@ TEST(CliErrors, MissingOrUnknownOptions) {
   // An empty value is not "the default".
   expect_usage_error({{"model", "--q", kQ, "--inertia", ""}, {"--inertia", "empty"}});
   expect_usage_error({{"log", "export", "", "--out", "x.csv"}, {"log", "empty"}});
+  // A whole number beyond 64 bits is not clamped to INT64_MAX.
+  expect_usage_error({{"workspace", "--samples", "10", "--seed", "99999999999999999999"}, {"--seed", "out of range"}});
 }
 
 // An unknown subcommand is named as such, not reported as a missing one.

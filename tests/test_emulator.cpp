@@ -2,6 +2,7 @@
 // scenario files, checked against independent references (a fine RK4 integration of the plant,
 // energy, the applied wrench, the scenario's reference trajectory).
 #include <cstdio>
+#include <functional>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -269,6 +270,58 @@ TEST(EmulatorReflex, PushTripsCartesianReflexAndBrakes) {
   EXPECT_FALSE(emulator.state().current_errors);
   EXPECT_EQ(emulator.state().robot_mode, rt::RobotMode::kIdle);
   EXPECT_NO_THROW(emulator.start_motion(ControlMode::kTorque));
+}
+
+bool finite_state(const rt::RobotState& s) {
+  return Vector7(s.q.data()).allFinite() && Vector7(s.dq.data()).allFinite() && Vector7(s.tau_J.data()).allFinite();
+}
+
+// Configuration a real Panda refuses (issue: a SET_LOAD of 1e300 was accepted and the idle robot
+// published NaN for good): refused with the reason, and the idle robot stays finite.
+TEST(EmulatorConfiguration, RefusesWhatTheRobotRefuses) {
+  Emulator emulator(matched_settings());
+  const auto refused = [&](const std::function<void()>& set, const std::string& fragment) {
+    try {
+      set();
+      ADD_FAILURE() << "accepted, expected: " << fragment;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  const Matrix3 not_positive_definite = Vector3(0.1, -0.1, 0.1).asDiagonal();
+  refused([&] { emulator.set_load({1e300, Vector3::Zero(), Matrix3::Zero()}); }, "setLoad: expected a mass from 0 to 3 kg");
+  refused([&] { emulator.set_load({1.0, Vector3(0, 0, 1e300), Matrix3::Zero()}); }, "setLoad: expected a centre of mass");
+  refused([&] { emulator.set_load({1.0, Vector3::Zero(), not_positive_definite}); }, "setLoad: expected a physical inertia");
+  refused([&] { emulator.set_joint_impedance(Vector7::Constant(1e300)); }, "setJointImpedance");
+  rt::CollisionBehavior crossed = rt::default_collision_behavior();
+  crossed.lower_torque_nominal[3] = crossed.upper_torque_nominal[3] + 1.0;
+  refused([&] { emulator.set_collision_behavior(crossed); }, "each lower threshold <= its upper one");
+  Transform sheared;
+  sheared.rotation(0, 1) = 0.5;
+  refused([&] { emulator.set_EE(sheared); }, "setEE: expected a rotation");
+  refused([&] { emulator.set_K(Transform{Matrix3::Identity(), Vector3(0, 0, 1e200)}); }, "setK: expected a translation");
+  EXPECT_NO_THROW(emulator.set_load({2.0, Vector3(0, 0, 0.05), Matrix3::Identity() * 1e-3}));   // a real payload
+  for (int k = 0; k < 500; ++k) emulator.step(nullptr);
+  EXPECT_TRUE(finite_state(emulator.state()));
+  EXPECT_EQ(emulator.state().robot_mode, rt::RobotMode::kIdle);
+}
+
+// If the integration diverges anyway (here an absurd scripted force), the robot reports a reflex at
+// its last finite pose, Idle included, and error recovery brings it back.
+TEST(EmulatorConfiguration, DivergenceIsAReflexNeverANanState) {
+  rt::EmulatorSettings settings = matched_settings();
+  settings.external_wrenches.push_back({7, Vector3::Zero(), Vector3(1e300, 0.0, 0.0), Vector3::Zero(), 0.05, 0.06, 0.0});
+  Emulator emulator(settings);
+  for (int k = 0; k < 100; ++k) {
+    emulator.step(nullptr);
+    ASSERT_TRUE(finite_state(emulator.state())) << "cycle " << k;
+  }
+  EXPECT_EQ(emulator.state().robot_mode, rt::RobotMode::kReflex);
+  EXPECT_NE(emulator.reflex_reason().find("diverged"), std::string::npos) << emulator.reflex_reason();
+  emulator.automatic_error_recovery();
+  for (int k = 0; k < 100; ++k) emulator.step(nullptr);
+  EXPECT_EQ(emulator.state().robot_mode, rt::RobotMode::kIdle);
+  EXPECT_TRUE(finite_state(emulator.state()));
 }
 
 // The default scenario's joint impedance controller (libfranka's example gains plus model

@@ -47,14 +47,6 @@ std::string row(double t, const std::string& value = "0.1") {
   return r + "\n";
 }
 
-std::string read_error(const std::string& path) {
-  try {
-    read_joint_log_csv(path);
-  } catch (const JointLogError& e) {
-    return e.what();
-  }
-  return "no error";
-}
 
 TEST(GapLog, RoundTripOfAGeneratedLog) {
   const Model model = diagnosing_model();
@@ -88,11 +80,11 @@ TEST(GapLog, BadInputNamesFileLineAndColumn) {
   };
   for (std::size_t i = 0; i < cases.size(); ++i) {
     const std::string path = write_file("bad_" + std::to_string(i) + ".csv", cases[i].text);
-    const std::string message = read_error(path);
+    const std::string message = joint_log_error(path);
     EXPECT_NE(message.find(path), std::string::npos) << message;
     EXPECT_NE(message.find(cases[i].expected), std::string::npos) << "case " << i << ": " << message;
   }
-  EXPECT_NE(read_error("/nonexistent/log.csv").find("cannot open"), std::string::npos);
+  EXPECT_NE(joint_log_error("/nonexistent/log.csv").find("cannot open"), std::string::npos);
 }
 
 TEST(GapLog, TooShortForTheFilter) {

@@ -15,18 +15,6 @@ void require_source(const Field& field) {
   if (field["source"].text().empty()) field["source"].fail("a non-empty source (a citation or `assumption: ...`)");
 }
 
-double positive(const Field& field) {
-  const double value = field.number();
-  if (value <= 0.0) field.fail("a positive number");
-  return value;
-}
-
-double non_negative(const Field& field) {
-  const double value = field.number();
-  if (value < 0.0) field.fail("a non-negative number");
-  return value;
-}
-
 Vector3 unit_vector(const Field& field) {
   const Vector3 v = field.vector<3>();
   if (std::abs(v.norm() - 1.0) > 1e-6) field.fail("a unit vector (norm 1 within 1e-6)");

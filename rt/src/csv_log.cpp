@@ -102,7 +102,13 @@ RobotState state_from_row(const JointLog& log, std::size_t row) {
 
 CsvLog::CsvLog(const std::string& path) : row_(state_layout()), writer_(path, row_) { row_.clear_rows(); }
 
-CsvLog::~CsvLog() { writer_.flush(); }
+CsvLog::~CsvLog() {
+  // A destructor must not throw: a write error here was (or will be) reported by write().
+  try {
+    writer_.flush();
+  } catch (const JointLogError&) {
+  }
+}
 
 void CsvLog::write(const RobotState& state, const CycleInfo& cycle) {
   row_.clear_rows();

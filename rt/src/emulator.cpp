@@ -1,5 +1,6 @@
 #include "csp/rt/emulator.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -16,6 +17,62 @@ constexpr double kMaxBrakingTime = 0.5;         // [s] the brakes close at the l
 constexpr double kAccelerationThreshold = 0.5;  // [rad/s^2] desired |ddq| above: "acceleration" thresholds
 constexpr double kWrenchDamping = 1e-2;         // damped pseudo-inverse of J^T (O_F_ext_hat_K)
 constexpr int kMaxConsecutiveLost = 20;         // FCI: 20 lost commands in a row end the motion
+// Configuration the robot refuses (a real Panda refuses loads and gains outside its limits and
+// never integrates a NaN; these bounds are CSP's, stated in docs/emulator.md):
+constexpr double kMaxPayload = 3.0;              // [kg] Franka's datasheet payload (Panda and FR3)
+constexpr double kMaxLoadDistance = 1.0;         // [m] load CoM from the flange: beyond the arm's own size
+constexpr double kMaxJointStiffness = 10000.0;   // [N m/rad] the joint impedance stays stable at 0.5 ms substeps
+
+template <typename Vector>
+bool within(const Vector& v, double low, double high) {
+  return v.allFinite() && (v.array() >= low).all() && (v.array() <= high).all();
+}
+
+// Why `behavior` cannot be set, or empty: every threshold a non-negative number (infinity: never
+// trips) and each lower (contact) threshold at most its upper (collision) one.
+std::string collision_behavior_problem(const CollisionBehavior& b) {
+  const auto pair = [](const auto& lower, const auto& upper, const char* name) -> std::string {
+    if (!(lower.array() >= 0.0).all() || !(upper.array() >= 0.0).all())   // NaN fails too
+      return std::string(name) + ": expected non-negative thresholds";
+    if ((lower.array() > upper.array()).any()) return std::string(name) + ": expected each lower threshold <= its upper one";
+    return {};
+  };
+  for (const std::string& problem :
+       {pair(b.lower_torque_acceleration, b.upper_torque_acceleration, "torque thresholds (acceleration)"),
+        pair(b.lower_torque_nominal, b.upper_torque_nominal, "torque thresholds (nominal)"),
+        pair(b.lower_force_acceleration, b.upper_force_acceleration, "force thresholds (acceleration)"),
+        pair(b.lower_force_nominal, b.upper_force_nominal, "force thresholds (nominal)")})
+    if (!problem.empty()) return problem;
+  return {};
+}
+
+std::string joint_stiffness_problem(const Vector7& stiffness) {
+  return within(stiffness, 0.0, kMaxJointStiffness) ? "" : "expected 7 finite stiffnesses from 0 to 10000 N m/rad";
+}
+
+std::string load_problem(const RigidBodyInertia& load) {
+  if (!(load.mass >= 0.0 && load.mass <= kMaxPayload)) return "expected a mass from 0 to 3 kg (the robot's payload)";
+  if (!load.com.allFinite() || load.com.norm() > kMaxLoadDistance) return "expected a centre of mass within 1 m of the flange";
+  if (!load.inertia.allFinite()) return "expected a finite inertia";
+  if (load.inertia.isZero() || load.mass == 0.0) return {};   // a point mass, or nothing
+  if (!is_physical_inertia(load.inertia) ||
+      Eigen::SelfAdjointEigenSolver<Matrix3>(load.inertia, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff() >
+          load.mass * kMaxLoadDistance * kMaxLoadDistance)
+    return "expected a physical inertia about the CoM (positive definite, triangle inequality, at most mass x 1 m^2)";
+  return {};
+}
+
+std::string transform_problem(const Transform& t) {
+  if (!t.rotation.allFinite() || !t.translation.allFinite()) return "expected a finite transform";
+  if (!(t.rotation.transpose() * t.rotation).isApprox(Matrix3::Identity(), 1e-6) || t.rotation.determinant() < 0.0)
+    return "expected a rotation (orthonormal, determinant 1)";
+  if (t.translation.norm() > kMaxLoadDistance) return "expected a translation within 1 m";
+  return {};
+}
+
+void require(const std::string& problem, const char* operation) {
+  if (!problem.empty()) throw std::invalid_argument(std::string(operation) + ": " + problem);
+}
 
 // First-order low-pass factor for a step of dt at cutoff f (exact for a constant input).
 double lowpass_factor(double cutoff_hz, double dt) { return 1.0 - std::exp(-2.0 * M_PI * cutoff_hz * dt); }
@@ -57,6 +114,8 @@ Emulator::Emulator(const EmulatorSettings& settings)
       plant_(settings.plant),
       internal_(settings.internal) {
   if (settings_.substeps < 1) throw std::invalid_argument("substeps: expected at least 1");
+  require(collision_behavior_problem(settings_.collision), "collision behavior");
+  require(joint_stiffness_problem(settings_.joint_stiffness), "joint impedance");
   F_T_NE_ = internal_parameters_.F_T_EE;
   PlantState& arm = plant_state_;
   arm.q = settings_.q_initial;
@@ -94,20 +153,19 @@ void Emulator::require_no_motion(const char* operation) const {
 
 void Emulator::set_collision_behavior(const CollisionBehavior& behavior) {
   require_no_motion("setCollisionBehavior");
+  require(collision_behavior_problem(behavior), "setCollisionBehavior");
   settings_.collision = behavior;
 }
 
 void Emulator::set_joint_impedance(const Vector7& stiffness) {
   require_no_motion("setJointImpedance");
-  if (!stiffness.allFinite() || (stiffness.array() < 0.0).any())
-    throw std::invalid_argument("setJointImpedance: expected 7 finite non-negative stiffnesses");
+  require(joint_stiffness_problem(stiffness), "setJointImpedance");
   settings_.joint_stiffness = stiffness;
 }
 
 void Emulator::set_load(const RigidBodyInertia& load) {
   require_no_motion("setLoad");
-  if (!std::isfinite(load.mass) || load.mass < 0.0 || !load.com.allFinite() || !load.inertia.allFinite())
-    throw std::invalid_argument("setLoad: expected a finite non-negative mass, finite CoM and inertia");
+  require(load_problem(load), "setLoad");
   internal_parameters_.load = load;
   rebuild_internal_model();
   publish();
@@ -115,6 +173,7 @@ void Emulator::set_load(const RigidBodyInertia& load) {
 
 void Emulator::set_EE(const Transform& NE_T_EE) {
   require_no_motion("setEE");
+  require(transform_problem(NE_T_EE), "setEE");
   NE_T_EE_ = NE_T_EE;
   rebuild_internal_model();
   publish();
@@ -122,6 +181,7 @@ void Emulator::set_EE(const Transform& NE_T_EE) {
 
 void Emulator::set_K(const Transform& EE_T_K) {
   require_no_motion("setK");
+  require(transform_problem(EE_T_K), "setK");
   internal_parameters_.EE_T_K = EE_T_K;
   rebuild_internal_model();
   publish();
@@ -346,6 +406,7 @@ void Emulator::integrate() {
 
   const double h = kDeltaT / settings_.substeps;
   const double alpha = lowpass_factor(settings_.torque_loop_bandwidth_hz, h);
+  const Vector7 q_before = arm.q;
   for (int s = 0; s < settings_.substeps; ++s) {
     // The robot's controllers run faster than the FCI: impedance and braking act every substep.
     Vector7 setpoint = reception_.last_user_torque;
@@ -362,6 +423,20 @@ void Emulator::integrate() {
   }
   // The sensor sits between rotor and link: the rotor's own inertia is not felt by it.
   arm.tau_J = loop.tau_motor - plant_.armature().cwiseProduct(arm.ddq);
+
+  if (!arm.q.allFinite() || !arm.dq.allFinite() || !arm.tau_J.allFinite()) {
+    // The integration diverged (a setting the checks let through): a real robot never reports a
+    // NaN. Keep the last finite pose, stop the arm on its brakes, and say why; recoverable.
+    arm.q = q_before;
+    arm.dq.setZero();
+    arm.ddq.setZero();
+    gravity_compensation_torque();
+    loop.tau_motor = loop.gravity;
+    rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, f_ext, arm.tau_J);
+    enter_reflex(Errors{}, "the emulated plant diverged (non-finite joint state); the arm was stopped at its last finite pose");
+    phase_ = Phase::kBraked;
+    return;
+  }
 
   if (braking && ((arm.dq.array().abs() < kBrakesClosedVelocity).all() ||
                   state_.time.toSec() - braking_since_ >= kMaxBrakingTime - 1e-9)) {

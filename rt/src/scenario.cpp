@@ -20,18 +20,6 @@ Vector6 non_negative6(const Field& f) {
   return v;
 }
 
-double positive(const Field& f) {
-  const double v = f.number();
-  if (v <= 0.0) f.fail("a positive number");
-  return v;
-}
-
-double non_negative(const Field& f) {
-  const double v = f.number();
-  if (v < 0.0) f.fail("a non-negative number");
-  return v;
-}
-
 // plant / robot_model: which named sets of the robot file, and the load.
 ModelOptions model_options(const Field& f, const std::string& end_effector, const std::string& joint_limits) {
   ModelOptions options;
@@ -87,7 +75,10 @@ void read_robot_settings(const Field& f, EmulatorSettings& s) {
   if (f.has("gravity_compensation")) s.gravity_compensation = f["gravity_compensation"].boolean();
   if (f.has("tau_J_noise")) s.tau_J_noise = non_negative7(f["tau_J_noise"]);
   if (f.has("tau_J_bias")) s.tau_J_bias = f["tau_J_bias"].vector<7>();
-  if (f.has("joint_impedance")) s.joint_stiffness = non_negative7(f["joint_impedance"]);
+  if (f.has("joint_impedance")) {
+    s.joint_stiffness = non_negative7(f["joint_impedance"]);
+    if ((s.joint_stiffness.array() > 10000.0).any()) f["joint_impedance"].fail("stiffnesses of at most 10000 N m/rad (setJointImpedance's bound)");
+  }
   if (f.has("collision_behavior")) {
     // libfranka's four-argument setCollisionBehavior: the same thresholds while accelerating and nominal.
     const Field c = f["collision_behavior"];
@@ -97,6 +88,10 @@ void read_robot_settings(const Field& f, EmulatorSettings& s) {
     b.upper_torque_acceleration = b.upper_torque_nominal = non_negative7(c["upper_torque"]);
     b.lower_force_acceleration = b.lower_force_nominal = non_negative6(c["lower_force"]);
     b.upper_force_acceleration = b.upper_force_nominal = non_negative6(c["upper_force"]);
+    if ((b.lower_torque_nominal.array() > b.upper_torque_nominal.array()).any())
+      c["lower_torque"].fail("thresholds at most upper_torque's (contact below collision)");
+    if ((b.lower_force_nominal.array() > b.upper_force_nominal.array()).any())
+      c["lower_force"].fail("thresholds at most upper_force's (contact below collision)");
   }
 }
 

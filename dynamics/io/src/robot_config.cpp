@@ -185,7 +185,7 @@ void reject_duplicate_keys(const YAML::Node& node, const std::string& path, cons
   if (!node.IsMap()) return;
   std::set<std::string> seen;
   for (const auto& item : node) {
-    const std::string key = item.first.Scalar();
+    const std::string key = printable_key(item.first.Scalar());
     const std::string child_path = key_path.empty() ? key : key_path + "." + key;
     if (!seen.insert(key).second)
       throw ConfigError(path + ": " + child_path + ": key given twice (line " + std::to_string(item.first.Mark().line + 1) +

@@ -18,6 +18,14 @@ namespace csp {
 // Parse a YAML file; a missing, unreadable or malformed file throws ConfigError naming it.
 YAML::Node load_yaml_file(const std::string& path, const std::string& what);
 
+// A key as it may appear in a one-line message: control characters (a newline in a quoted key)
+// shown as `?`.
+inline std::string printable_key(std::string key) {
+  for (char& c : key)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return key;
+}
+
 // A YAML node together with the file and key path it came from, so that every error can say
 // exactly where it is.
 class Field {
@@ -34,7 +42,7 @@ class Field {
   Field operator[](const std::string& key) const {
     if (!node_.IsMap()) fail("a mapping");
     const YAML::Node child = node_[key];
-    const std::string child_path = path_.empty() ? key : path_ + "." + key;
+    const std::string child_path = path_.empty() ? printable_key(key) : path_ + "." + printable_key(key);
     if (!child) Field(node_, file_, child_path).fail("this key (missing)");
     return Field(child, file_, child_path);
   }
@@ -45,22 +53,24 @@ class Field {
 
   // Reject keys other than the allowed ones (a typo must not become a silent default).
   void allow_only(std::initializer_list<const char*> keys) const {
-    if (!node_.IsMap()) fail("a mapping");
     const std::set<std::string> allowed(keys.begin(), keys.end());
-    for (const auto& item : node_) {
-      const auto key = item.first.as<std::string>();
+    for (const std::string& key : this->keys()) {
       if (!allowed.contains(key)) {
         std::string list;
         for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
-        Field(node_, file_, path_.empty() ? key : path_ + "." + key).fail("no such key (allowed: " + list + ")");
+        Field(node_, file_, path_.empty() ? printable_key(key) : path_ + "." + printable_key(key)).fail("no such key (allowed: " + list + ")");
       }
     }
   }
 
+  // The keys of a mapping; each must be a plain word (a key that is itself a list or mapping is refused).
   std::vector<std::string> keys() const {
     if (!node_.IsMap()) fail("a mapping");
     std::vector<std::string> out;
-    for (const auto& item : node_) out.push_back(item.first.as<std::string>());
+    for (const auto& item : node_) {
+      if (!item.first.IsScalar()) fail("keys that are plain words (line " + std::to_string(item.first.Mark().line + 1) + ")");
+      out.push_back(item.first.Scalar());
+    }
     return out;
   }
 
@@ -111,6 +121,18 @@ class Field {
   std::string file_;
   std::string path_;
 };
+
+inline double positive(const Field& field) {
+  const double value = field.number();
+  if (value <= 0.0) field.fail("a positive number");
+  return value;
+}
+
+inline double non_negative(const Field& field) {
+  const double value = field.number();
+  if (value < 0.0) field.fail("a non-negative number");
+  return value;
+}
 
 // A load on the flange as libfranka's setLoad takes it: mass [kg] >= 0, optional CoM [m] in the
 // flange frame and inertia about the CoM (xx, xy, xz, yy, yz, zz) [kg m^2], physical when given.
