@@ -220,17 +220,19 @@ Class robot_yaml() {
 
 Class scenario_yaml() {
   std::vector<std::string> bases;
-  for (const char* name : {"default", "fr3_float", "lossy_network"})
-    bases.push_back(read_text(std::string(CSP_SOURCE_DIR) + "/configs/scenarios/" + name + ".yaml"));
+  // The shipped scenarios, their robot files named by absolute path so that the mutants can live
+  // in a temporary folder (never beside the shipped files, where other tests list them).
+  const std::string robots = std::string(CSP_SOURCE_DIR) + "/configs/robots/";
+  for (const char* name : {"default", "fr3_float", "lossy_network"}) {
+    std::string text = read_text(std::string(CSP_SOURCE_DIR) + "/configs/scenarios/" + name + ".yaml");
+    for (std::size_t at = text.find("../robots/"); at != std::string::npos; at = text.find("../robots/", at))
+      text.replace(at, 10, robots);
+    bases.push_back(text);
+  }
   return {"scenario_yaml", [bases](Mutator& m) { return m.text(m.pick(bases)); },
           [](const std::string& input) -> Verdict {
-            // Beside the shipped robot files, which the scenarios name relative to themselves.
-            const std::string path = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/.fuzz-" + std::to_string(getpid()) + ".yaml";
+            const std::string path = temp_dir() + "/scenario.yaml";
             write_text(path, input);
-            struct Remove {
-              std::string path;
-              ~Remove() { std::filesystem::remove(path); }
-            } remove{path};
             try {
               const rt::Scenario scenario = rt::load_scenario(path);
               rt::Emulator emulator(scenario.emulator);

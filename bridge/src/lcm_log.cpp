@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "csp/io/yaml_field.hpp"
+
 namespace csp::bridge {
 namespace {
 
@@ -178,6 +180,7 @@ rt::Scenario scenario_from_message(const scenario_t& m) {
   std::filesystem::create_directories(dir);
   rt::Scenario scenario;
   try {
+    check_yaml_layout(m.text, "the recorded scenario " + m.path);
     YAML::Node root = YAML::Load(m.text);
     root["robot"] = "robot.yaml";
     write_text(dir / "robot.yaml", m.robot_text);

@@ -1,7 +1,10 @@
 #include "csp/io/robot_config.hpp"
 
 #include <cmath>
+#include <cctype>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <set>
 
 #include "csp/io/yaml_field.hpp"
@@ -196,12 +199,45 @@ void reject_duplicate_keys(const YAML::Node& node, const std::string& path, cons
 
 }  // namespace
 
+void check_yaml_layout(const std::string& text, const std::string& path) {
+  std::istringstream in(text);
+  std::string line;
+  bool started = false;   // the first key has been seen
+  for (int number = 1; std::getline(in, line); ++number) {
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const bool marker = line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0;
+    if (started) {
+      if (marker) throw ConfigError(path + ": expected one YAML document, found a second at line " + std::to_string(number));
+      continue;
+    }
+    if (line[0] == '%') continue;   // a directive
+    if (line.rfind("---", 0) == 0 && line.find_first_not_of(" \t\r", 3) == std::string::npos) continue;
+    // yaml-cpp 0.7 loops forever on a document that does not start with a mapping key but meets a
+    // ',' (for instance `"s"` then `, x`, or `--- , x`): CSP's files are mappings, so say so first.
+    std::size_t end = 0;
+    while (end < line.size() && (std::isalnum(static_cast<unsigned char>(line[end])) || line[end] == '_')) ++end;
+    const std::size_t colon = line.find_first_not_of(" \t", end);
+    if (end == 0 || !std::isalpha(static_cast<unsigned char>(line[0])) || colon == std::string::npos || line[colon] != ':' ||
+        (colon + 1 < line.size() && line[colon + 1] != ' ' && line[colon + 1] != '\t' && line[colon + 1] != '\r'))
+      throw ConfigError(path + ": expected a mapping of keys at the top level (`name: ...`), line " + std::to_string(number));
+    started = true;
+  }
+}
+
 YAML::Node load_yaml_file(const std::string& path, const std::string& what) {
   if (!std::filesystem::is_regular_file(path))
     throw ConfigError(path + ": cannot open the " + what + " (missing, or not a regular file)");
+  std::ostringstream text;
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!(text << in.rdbuf()) && in.peek() != std::ifstream::traits_type::eof())
+      throw ConfigError(path + ": cannot read the " + what);
+  }
+  check_yaml_layout(text.str(), path);
   std::vector<YAML::Node> documents;
   try {
-    documents = YAML::LoadAllFromFile(path);
+    documents = YAML::LoadAll(text.str());
   } catch (const YAML::BadFile&) {
     throw ConfigError(path + ": cannot open the " + what);
   } catch (const YAML::Exception& e) {

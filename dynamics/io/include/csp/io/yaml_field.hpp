@@ -18,6 +18,10 @@ namespace csp {
 // Parse a YAML file; a missing, unreadable or malformed file throws ConfigError naming it.
 YAML::Node load_yaml_file(const std::string& path, const std::string& what);
 
+// The layout CSP's YAML files must have before yaml-cpp parses them: one document whose first
+// content line is a top-level mapping key. Throws ConfigError naming `path` and the line.
+void check_yaml_layout(const std::string& text, const std::string& path);
+
 // A key as it may appear in a one-line message: control characters (a newline in a quoted key)
 // shown as `?`.
 inline std::string printable_key(std::string key) {
