@@ -773,6 +773,13 @@ TEST(ConfigValidation, KeyGivenTwiceAndSecondDocumentAreRejected) {
   const std::string path = write_temp("two_documents.yaml", read_text(robot_file("panda")) + "\n---\nname: other\n");
   const std::string message = load_error_at(path);
   EXPECT_NE(message.find(path + ": expected one YAML document, found a second at line"), std::string::npos) << message;
+  // A NUL in a key (found by csp_fuzz): yaml-cpp's own message then spans lines; CSP's stays one.
+  std::string with_nul = read_text(robot_file("panda"));
+  with_nul.replace(with_nul.find("sets:"), 5, std::string("sets\0", 5));
+  const std::string nul_path = write_temp("nul.yaml", with_nul);
+  const std::string nul_message = load_error_at(nul_path);
+  EXPECT_EQ(std::count(nul_message.begin(), nul_message.end(), '\n'), 0) << nul_message;
+  EXPECT_NE(nul_message.find(nul_path + ": "), std::string::npos) << nul_message;
   // yaml-cpp 0.7 loops forever on these (found by csp_fuzz): refused before it sees them.
   for (const char* text : {", x\n", "\"s\"\n, x\n", "--- , x\n", "name: x\n...\n, x\n", "&a , x\n"}) {
     const std::string hang = write_temp("hang.yaml", text);

@@ -190,7 +190,7 @@ rt::Scenario scenario_from_message(const scenario_t& m) {
     scenario = rt::load_scenario((dir / "scenario.yaml").string());
   } catch (const std::exception& e) {
     // Name the recorded files, not the temporary copies that are about to be removed.
-    std::string what = e.what();
+    std::string what = printable_key(e.what());   // yaml-cpp may quote a control character
     for (const auto& [copy, original] : {std::pair{(dir / "robot.yaml").string(), "the recorded robot file " + m.robot_path},
                                          std::pair{(dir / "scenario.yaml").string(), "the recorded scenario " + m.path}})
       for (std::size_t at = what.find(copy); at != std::string::npos; at = what.find(copy, at + original.size()))

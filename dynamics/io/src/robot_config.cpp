@@ -241,7 +241,7 @@ YAML::Node load_yaml_file(const std::string& path, const std::string& what) {
   } catch (const YAML::BadFile&) {
     throw ConfigError(path + ": cannot open the " + what);
   } catch (const YAML::Exception& e) {
-    throw ConfigError(path + ": not valid YAML: " + e.msg + " (line " + std::to_string(e.mark.line + 1) + ")");
+    throw ConfigError(path + ": not valid YAML: " + printable_key(e.msg) + " (line " + std::to_string(e.mark.line + 1) + ")");
   } catch (const std::exception& e) {   // e.g. an I/O error while reading
     throw ConfigError(path + ": cannot read the " + what + ": " + e.what());
   }
