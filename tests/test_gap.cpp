@@ -255,6 +255,87 @@ TEST_F(GapEffectRecovery, GazFrictionLaw) {
     }
 }
 
+// The new effects recover the parameters of a noise-free truth made with the same law.
+TEST_F(GapEffectRecovery, SensorGainDriftLoadFriction) {
+  InjectedEffects truth;
+  truth.sensor_gain << 0.05, -0.04, 0.06, -0.03, 0.05, 0.04, -0.06;
+  auto gain = fit("sensor_gain", truth).at("gain_error_percent").get<std::vector<double>>();
+  // The model torque stands in for the true one: the estimate is g / (1 + g) ~ g - g^2.
+  for (int j = 0; j < 7; ++j) EXPECT_NEAR(gain[j], 100 * truth.sensor_gain[j], 0.5) << "joint " << j + 1;
+
+  truth = {};
+  truth.drift_rate << 0.03, -0.02, 0.04, -0.05, 0.02, 0.03, -0.01;
+  auto drift = fit("thermal_drift", truth).at("drift_Nm_per_min").get<std::vector<double>>();
+  for (int j = 0; j < 7; ++j) EXPECT_NEAR(drift[j], 60 * truth.drift_rate[j], 0.02) << "joint " << j + 1;
+
+  truth = {};
+  truth.load_friction << 0.03, 0.04, 0.02, 0.05, 0.03, 0.02, 0.04;
+  auto load = fit("load_dependent_friction", truth).at("coefficient").get<std::vector<double>>();
+  for (int j = 0; j < 7; ++j) EXPECT_NEAR(load[j], truth.load_friction[j], 2e-3) << "joint " << j + 1;
+}
+
+TEST_F(GapEffectRecovery, PositionRipple) {
+  InjectedEffects truth;
+  truth.ripple_amplitude << 0.4, 0.3, 0.35, 0.45, 0.25, 0.3, 0.2;
+  truth.ripple_period << 0.26, 0.4, 0.55, 0.3, 0.2, 0.45, 0.35;
+  truth.ripple_phase << 0.1, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0;
+  const nlohmann::json ripple = fit("position_ripple", truth);
+  for (int j = 0; j < 7; ++j) {
+    EXPECT_NEAR(ripple["period_rad"][j].get<double>(), truth.ripple_period[j], 0.01 * truth.ripple_period[j]);
+    EXPECT_NEAR(ripple["amplitude_Nm"][j].get<double>(), truth.ripple_amplitude[j], 0.05) << "joint " << j + 1;
+  }
+}
+
+TEST_F(GapEffectRecovery, StaticFrictionAndHysteresis) {
+  InjectedEffects truth;
+  truth.breakaway_excess << 0.8, 0.6, 0.7, 0.9, 0.5, 0.6, 0.7;
+  truth.stribeck_velocity = 0.05;
+  const nlohmann::json stiction = fit("static_friction", truth);
+  EXPECT_NEAR(stiction.at("stribeck_velocity_rad_per_s").get<double>(), 0.05, 0.01);
+  for (int j = 0; j < 7; ++j)
+    EXPECT_NEAR(stiction["breakaway_excess_Nm"][j].get<double>(), truth.breakaway_excess[j], 0.15) << j + 1;
+
+  truth = {};
+  truth.hysteresis_amplitude << 0.5, 0.6, 0.4, 0.7, 0.5, 0.3, 0.4;
+  truth.presliding_distance = 0.02;
+  const nlohmann::json hysteresis = fit("friction_hysteresis", truth);
+  EXPECT_NEAR(hysteresis.at("presliding_distance_rad").get<double>(), 0.02, 0.004);
+  for (int j = 0; j < 7; ++j)
+    EXPECT_NEAR(hysteresis["amplitude_Nm"][j].get<double>(), truth.hysteresis_amplitude[j], 0.1) << j + 1;
+}
+
+// Dahl's state advanced over one monotone step equals the same step taken in a thousand pieces
+// (the law's ODE integrated finely), and it stays within [-1, 1].
+TEST(GapEffects, DahlStateIsTheExactSolutionOfItsOde) {
+  for (double z0 : {-1.0, -0.3, 0.5, 1.0})
+    for (double step : {-0.05, -0.004, 0.001, 0.03}) {
+      double z = z0;
+      for (int k = 0; k < 1000; ++k) z += (1.0 - z * (step > 0 ? 1.0 : -1.0)) * (step / 1000) / 0.01;
+      EXPECT_NEAR(dahl_state(z0, step, 0.01), z, 1e-3);
+      EXPECT_LE(std::abs(dahl_state(z0, step, 0.01)), 1.0);
+    }
+  // Far past the presliding distance the state is the sliding direction: the effect vanishes.
+  EXPECT_NEAR(hysteresis_torque(0.5, dahl_state(-1.0, 0.5, 0.01), 0.3), 0.0, 1e-9);
+}
+
+// The ripple effect's analytic Jacobian against central differences of its torque.
+TEST(GapEffects, RippleJacobianMatchesFiniteDifferences) {
+  const Model model = diagnosing_model();
+  const Part part = evaluate_part(model, InertialRegressor(model), filter_log(plain_log(model, 2.0, 3), FilterOptions{}));
+  const auto library = effect_library(model);
+  const Effect& ripple = *library[8];
+  ASSERT_EQ(ripple.name(), "position_ripple");
+  Eigen::VectorXd theta(21);
+  for (int j = 0; j < 7; ++j) theta.segment<3>(3 * j) << 0.3, -0.2, std::log(0.2 + 0.05 * j);
+  const Eigen::MatrixXd J = ripple.jacobian(part, theta);
+  for (int k = 0; k < 21; ++k) {
+    Eigen::VectorXd plus = theta, minus = theta;
+    plus[k] += 1e-6, minus[k] -= 1e-6;
+    const Eigen::VectorXd numeric = (ripple.torque(part, plus) - ripple.torque(part, minus)) / 2e-6;
+    EXPECT_LT((J.col(k) - numeric).cwiseAbs().maxCoeff(), 1e-6) << "parameter " << k;
+  }
+}
+
 // The friction effect's analytic Jacobian against central differences of its torque.
 TEST(GapEffects, FrictionJacobianMatchesFiniteDifferences) {
   const Model model = diagnosing_model();
@@ -298,6 +379,12 @@ TEST(GapDiagnosis, JsonContract) {
     for (int joint : e.at("joints")) EXPECT_TRUE(joint >= 1 && joint <= 7);
   }
   EXPECT_EQ(names, std::set<std::string>(kEffectNames.begin(), kEffectNames.end()));
+  ASSERT_TRUE(j.at("verdict").at("unexplained").is_array());
+  for (const auto& u : j.at("verdict").at("unexplained")) {
+    EXPECT_TRUE(u.at("joint").get<int>() >= 1 && u.at("joint").get<int>() <= 7);
+    EXPECT_TRUE(u.at("kind").is_string() && u.at("detail").is_string());
+    EXPECT_GE(u.at("size").get<double>(), kUnexplainedSize);
+  }
   EXPECT_EQ(j.at("verdict").at("causes"), nlohmann::json::array({"sensor_offset"}));
   EXPECT_EQ(j.at("verdict").at("heldout_rms_after").size(), 7u);
   const double unexplained = j.at("verdict").at("unexplained_fraction");

@@ -48,6 +48,17 @@ MatrixXd set_jacobian(const EffectSet& set, const Part& part, const VectorXd& th
   return J;
 }
 
+// The parameters of `set` without `removed`'s, and the set without it in `others`.
+VectorXd without_effect(const EffectSet& set, const VectorXd& theta, const Effect* removed, EffectSet& others) {
+  VectorXd out(set_size(set) - removed->size());
+  Eigen::Index from = 0, to = 0;
+  for (const Effect* e : set) {
+    if (e != removed) others.push_back(e), out.segment(to, e->size()) = theta.segment(from, e->size()), to += e->size();
+    from += e->size();
+  }
+  return out;
+}
+
 struct SetFit {
   VectorXd theta, sigma;
   VectorXd train_left, heldout_left;  // residuals after the set: baseline residual - set torque
@@ -58,6 +69,7 @@ struct SetFit {
 // squares solution, so the nonlinear fit sees the residual projected off the linear columns);
 // Levenberg-Marquardt with Marquardt's diagonal scaling fits the nonlinear ones.
 SetFit fit_set(const EffectSet& set, const Part& train, const Part& heldout, VectorXd theta) {
+  if (set.empty()) return {VectorXd(0), VectorXd(0), train.residual, heldout.residual};  // the model alone
   EffectSet nonlinear;
   std::vector<Eigen::Index> linear_at, nonlinear_at;  // positions in theta
   std::vector<MatrixXd> linear_columns;
@@ -359,10 +371,49 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
     d.steps.push_back(best_result);
     current = best_fit;
   }
+
+  // Backward check: a small effect picked early (it stood in for part of a larger one, and the
+  // parsimony rule preferred it) may add nothing once the later causes are in; and a fit that passed
+  // by chance on one held-out part rarely passes with the parts' roles swapped. So every cause must
+  // pass the significance criterion against the other causes, fitted on the training part and judged
+  // on the held-out one, and also fitted on the held-out part and judged on the training one. The
+  // weakest cause that fails is dropped and the rest refitted, until all pass.
+  const RandomRegressors random_swapped(heldout, train, options.seed);
+  auto passes = [&](const EffectSet& set, const Effect* effect, const VectorXd& theta, const Part& fit_on,
+                    const Part& judge_on, const RandomRegressors& null, double& improvement) {
+    EffectSet others;
+    const VectorXd start = without_effect(set, theta, effect, others);
+    const SetFit with = fit_set(set, fit_on, judge_on, theta), without = fit_set(others, fit_on, judge_on, start);
+    improvement = explained(without.heldout_left, with.heldout_left);
+    return improvement > null.best_improvement(effect->size(), options.null_draws, without.train_left,
+                                               without.heldout_left) &&
+           improvement >= options.min_explained;
+  };
+  for (bool dropped = true; dropped && !selected.empty();) {
+    dropped = false;
+    double weakest = std::numeric_limits<double>::infinity();
+    std::size_t weakest_at = 0;
+    for (std::size_t i = 0; i < selected.size(); ++i) {
+      double forward = 0.0, swapped = 0.0;
+      const bool significant = passes(selected, selected[i], current.theta, train, heldout, random, forward) &&
+                               passes(selected, selected[i], current.theta, heldout, train, random_swapped, swapped);
+      if (!significant && std::min(forward, swapped) < weakest) weakest = std::min(forward, swapped), weakest_at = i;
+    }
+    if (std::isfinite(weakest)) {
+      d.dropped.push_back(selected[weakest_at]->name());
+      d.causes.erase(d.causes.begin() + static_cast<std::ptrdiff_t>(weakest_at));
+      EffectSet others;
+      const VectorXd start = without_effect(selected, current.theta, selected[weakest_at], others);
+      selected = others;
+      current = fit_set(selected, train, heldout, start);
+      dropped = true;
+    }
+  }
   d.verdict_heldout_rms_after = rms(current.heldout_left);
   d.unexplained_fraction = current.heldout_left.squaredNorm() / heldout.residual.squaredNorm();
-  d.verdict_params = d.steps.empty() ? nlohmann::json::object() : d.steps.back().params;
+  d.verdict_params = selected.empty() ? nlohmann::json::object() : describe_set(selected, current);
   d.verdict_heldout_torque = heldout.residual - current.heldout_left;
+  d.unexplained = localise_unexplained(heldout, current.heldout_left, d.causes);
   return d;
 }
 
@@ -396,7 +447,17 @@ nlohmann::json to_json(const Diagnosis& d) {
                      {"explained_fraction_of_remaining", s.explained_fraction},
                      {"null_threshold", s.null_threshold},
                      {"heldout_rms_after", vec(s.heldout_rms_after)}});
+  nlohmann::json unexplained = nlohmann::json::array();
+  for (const UnexplainedStructure& u : d.unexplained)
+    unexplained.push_back({{"joint", u.joint},
+                           {"kind", u.kind},
+                           {"size", u.size},
+                           {"share", u.share},
+                           {"value", u.value},
+                           {"detail", u.detail}});
   out["verdict"] = {{"causes", d.causes},
+                    {"dropped", d.dropped},
+                    {"unexplained", unexplained},
                     {"heldout_rms_after", vec(d.verdict_heldout_rms_after)},
                     {"unexplained_fraction", d.unexplained_fraction},
                     {"params", d.verdict_params},

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 
 #include "csp/dynamics/algorithms.hpp"
@@ -252,10 +253,271 @@ class JointFriction : public Effect {
   }
 };
 
+
+// --- sensor_gain: each torque sensor reads (1 + g_j) times the true torque ---------------------
+// The residual is then g_j tau_j; the model's predicted torque stands in for tau_j (the gain is a
+// few per cent, so the error of that stand-in is second order).
+class SensorGain : public LinearEffect {
+ public:
+  std::string name() const override { return "sensor_gain"; }
+  int size() const override { return kNumJoints; }
+  MatrixXd regressor(const Part& part) const override {
+    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
+    for (std::size_t k = 0; k < part.samples.size(); ++k)
+      for (int j = 0; j < kNumJoints; ++j) Y(rows_of(static_cast<int>(k)) + j, j) = part.predicted[k][j];
+    return Y;
+  }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    return {{"gain_error_percent", values(100.0 * theta, 0, kNumJoints)},
+            {"gain_error_percent_sigma", values(100.0 * sigma, 0, kNumJoints)}};
+  }
+};
+
+// --- thermal_drift: a sensor offset that drifts linearly over the log, rate_j t -----------------
+// t is the log's own time (from its first row), so a log split in two keeps one drift. A drift
+// that started before the log adds a constant: that part is sensor_offset's.
+class ThermalDrift : public LinearEffect {
+ public:
+  std::string name() const override { return "thermal_drift"; }
+  int size() const override { return kNumJoints; }
+  MatrixXd regressor(const Part& part) const override {
+    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
+    for (std::size_t k = 0; k < part.samples.size(); ++k)
+      for (int j = 0; j < kNumJoints; ++j) Y(rows_of(static_cast<int>(k)) + j, j) = part.samples.t[k];
+    return Y;
+  }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    return {{"drift_Nm_per_min", values(60.0 * theta, 0, kNumJoints)},
+            {"drift_Nm_per_min_sigma", values(60.0 * sigma, 0, kNumJoints)}};
+  }
+};
+
+// --- load_dependent_friction: coefficient_j |tau_j| sgn(dq_j), tau_j the model's torque ---------
+class LoadDependentFriction : public LinearEffect {
+ public:
+  std::string name() const override { return "load_dependent_friction"; }
+  int size() const override { return kNumJoints; }
+  MatrixXd regressor(const Part& part) const override {
+    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
+    for (std::size_t k = 0; k < part.samples.size(); ++k)
+      for (int j = 0; j < kNumJoints; ++j)
+        Y(rows_of(static_cast<int>(k)) + j, j) = load_friction(1.0, part.predicted[k][j], part.samples.dq[k][j]);
+    return Y;
+  }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    return {{"coefficient", values(theta, 0, kNumJoints)}, {"coefficient_sigma", values(sigma, 0, kNumJoints)}};
+  }
+};
+
+// --- position_ripple: per joint a sin(2 pi q / P) + b cos(2 pi q / P); (a, b, ln P) per joint ----
+class PositionRipple : public Effect {
+ public:
+  std::string name() const override { return "position_ripple"; }
+  int size() const override { return 3 * kNumJoints; }
+
+  VectorXd torque(const Part& part, const VectorXd& theta) const override {
+    VectorXd tau(part.rows());
+    for (Eigen::Index r = 0; r < part.rows(); ++r) {
+      const int j = static_cast<int>(r % kNumJoints);
+      tau[r] = position_ripple(theta[3 * j], theta[3 * j + 1], std::exp(theta[3 * j + 2]),
+                               part.samples.q[r / kNumJoints][j]);
+    }
+    return tau;
+  }
+  MatrixXd jacobian(const Part& part, const VectorXd& theta) const override {
+    MatrixXd J = MatrixXd::Zero(part.rows(), size());
+    for (Eigen::Index r = 0; r < part.rows(); ++r) {
+      const int j = static_cast<int>(r % kNumJoints);
+      const double a = theta[3 * j], b = theta[3 * j + 1], period = std::exp(theta[3 * j + 2]);
+      const double x = 2.0 * M_PI * part.samples.q[r / kNumJoints][j] / period;
+      J(r, 3 * j) = std::sin(x);
+      J(r, 3 * j + 1) = std::cos(x);
+      J(r, 3 * j + 2) = -x * (a * std::cos(x) - b * std::sin(x));  // dx/d(ln P) = -x
+    }
+    return J;
+  }
+  // Per joint, the best of a grid of periods (0.08..1 rad, the link-side periods that stay below
+  // the smoothing filter's cut-off at the excitation's speeds) with (a, b) by least squares.
+  VectorXd initial_guess(const Part& part, const VectorXd& target) const override {
+    VectorXd theta(size());
+    const Eigen::Index n = part.rows() / kNumJoints;
+    for (int j = 0; j < kNumJoints; ++j) {
+      double best = std::numeric_limits<double>::infinity();
+      for (int g = 0; g <= kGrid; ++g) {
+        const double period = kShortest * std::pow(kLongest / kShortest, static_cast<double>(g) / kGrid);
+        Eigen::MatrixX2d A(n, 2);
+        VectorXd b(n);
+        for (Eigen::Index k = 0; k < n; ++k) {
+          const double x = 2.0 * M_PI * part.samples.q[k][j] / period;
+          A(k, 0) = std::sin(x), A(k, 1) = std::cos(x), b[k] = target[kNumJoints * k + j];
+        }
+        const Eigen::Vector2d ab = A.colPivHouseholderQr().solve(b);
+        const double rss = (A * ab - b).squaredNorm();
+        if (rss < best) best = rss, theta.segment<3>(3 * j) << ab[0], ab[1], std::log(period);
+      }
+    }
+    return theta;
+  }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    std::vector<double> amplitude, period, period_sigma;
+    for (int j = 0; j < kNumJoints; ++j) {
+      amplitude.push_back(std::hypot(theta[3 * j], theta[3 * j + 1]));
+      period.push_back(std::exp(theta[3 * j + 2]));
+      period_sigma.push_back(period.back() * sigma[3 * j + 2]);
+    }
+    return {{"amplitude_Nm", amplitude}, {"period_rad", period}, {"period_rad_sigma", period_sigma}};
+  }
+
+ private:
+  static constexpr double kShortest = 0.08, kLongest = 1.0;  // [rad]
+  static constexpr int kGrid = 80;
+};
+
+// A nonlinear effect made of one shape per joint scaled by a per-joint amplitude, the shape
+// depending on one shared nonlinear parameter (ln of a velocity or a distance). Parameters:
+// 7 amplitudes (as the law wants them), then the shared ln parameter. The shapes change within a
+// few hundredths of a rad/s or rad, faster than the smoothing filter passes: they are evaluated on
+// the log's uniform grid and smoothed like the measured torque (Samples::smoothed).
+class AmplitudesAndShape : public Effect {
+ public:
+  int size() const override { return kNumJoints + 1; }
+  VectorXd torque(const Part& part, const VectorXd& theta) const override {
+    const std::vector<Vector7> shape = shapes(part, shared_parameter(theta[kNumJoints]));
+    VectorXd tau(part.rows());
+    for (Eigen::Index r = 0; r < part.rows(); ++r) {
+      const int j = static_cast<int>(r % kNumJoints);
+      tau[r] = amplitude(theta[j]) * shape[static_cast<std::size_t>(r / kNumJoints)][j];
+    }
+    return tau;
+  }
+  // The best shared parameter on a grid, with the amplitudes by least squares per joint.
+  VectorXd initial_guess(const Part& part, const VectorXd& target) const override {
+    VectorXd theta(size());
+    double best = std::numeric_limits<double>::infinity();
+    for (double shared : grid()) {
+      const std::vector<Vector7> shape = shapes(part, shared);
+      double rss = 0.0;
+      Vector7 amplitudes;
+      for (int j = 0; j < kNumJoints; ++j) {
+        double sy = 0.0, ss = 0.0;
+        for (std::size_t k = 0; k < shape.size(); ++k)
+          sy += shape[k][j] * target[rows_of(static_cast<int>(k)) + j], ss += shape[k][j] * shape[k][j];
+        amplitudes[j] = ss > 0.0 ? sy / ss : 0.0;
+        rss -= ss > 0.0 ? sy * sy / ss : 0.0;
+      }
+      if (rss < best) {
+        best = rss;
+        for (int j = 0; j < kNumJoints; ++j) theta[j] = parameter_of(amplitudes[j]);
+        theta[kNumJoints] = std::log(shared);
+      }
+    }
+    return theta;
+  }
+
+ protected:
+  // The shared parameter from its ln, kept on the grid's range: beyond it the shape would turn into
+  // a sliding (Coulomb) law, which is joint_friction's.
+  double shared_parameter(double ln_value) const {
+    const std::vector<double> g = grid();
+    return std::clamp(std::exp(ln_value), g.front(), g.back());
+  }
+  // Each sample's shape per joint for the shared parameter (a velocity or distance, > 0).
+  std::vector<Vector7> shapes(const Part& part, double shared) const {
+    return part.samples.smoothed(grid_shapes(part.samples, shared));
+  }
+  // The shape on the uniform grid (Samples::grid_q, grid_dq).
+  virtual std::vector<Vector7> grid_shapes(const Samples& samples, double shared) const = 0;
+  virtual std::vector<double> grid() const = 0;
+  // The amplitude from its parameter, and the parameter from a least-squares amplitude.
+  virtual double amplitude(double parameter) const { return parameter; }
+  virtual double parameter_of(double amplitude) const { return amplitude; }
+};
+
+// --- static_friction: per joint s_j sgn(dq) exp(-(dq / v_s)^2), s_j > 0 (as ln s_j), shared v_s --
+class StaticFriction : public AmplitudesAndShape {
+ public:
+  std::string name() const override { return "static_friction"; }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    const VectorXd excess = theta.head<kNumJoints>().array().exp();
+    return {{"breakaway_excess_Nm", values(excess, 0, kNumJoints)},
+            {"breakaway_excess_Nm_sigma", values(excess.cwiseProduct(sigma.head<kNumJoints>()), 0, kNumJoints)},
+            {"stribeck_velocity_rad_per_s", shared_parameter(theta[kNumJoints])}};
+  }
+
+ protected:
+  std::vector<Vector7> grid_shapes(const Samples& samples, double stribeck_velocity) const override {
+    std::vector<Vector7> out(samples.grid_dq.size());
+    for (std::size_t k = 0; k < out.size(); ++k)
+      for (int j = 0; j < kNumJoints; ++j) out[k][j] = stribeck_excess(1.0, stribeck_velocity, samples.grid_dq[k][j]);
+    return out;
+  }
+  // Stribeck velocities of geared robot joints are a few hundredths of a rad/s; a wider bump
+  // would be a sliding (Coulomb) law, which is joint_friction's.
+  std::vector<double> grid() const override { return {0.01, 0.015, 0.02, 0.03, 0.045, 0.07, 0.1}; }
+  double amplitude(double parameter) const override { return std::exp(parameter); }
+  double parameter_of(double amplitude) const override { return std::log(std::max(amplitude, 1e-3)); }
+};
+
+// --- friction_hysteresis: per joint a_j (z_j - sgn(dq_j)), z_j Dahl's state, shared presliding ---
+// distance x0. z is integrated along the grid in time order from z = sgn(dq) at its start.
+class FrictionHysteresis : public AmplitudesAndShape {
+ public:
+  std::string name() const override { return "friction_hysteresis"; }
+  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+    return {{"amplitude_Nm", values(theta, 0, kNumJoints)},
+            {"amplitude_Nm_sigma", values(sigma, 0, kNumJoints)},
+            {"presliding_distance_rad", shared_parameter(theta[kNumJoints])}};
+  }
+
+ protected:
+  std::vector<Vector7> grid_shapes(const Samples& samples, double presliding_distance) const override {
+    const std::vector<Vector7>& q = samples.grid_q;
+    const std::vector<Vector7>& dq = samples.grid_dq;
+    std::vector<Vector7> out(q.size());
+    Vector7 z;
+    for (int j = 0; j < kNumJoints; ++j) z[j] = q.empty() ? 0.0 : smooth_sign(dq[0][j]);
+    for (std::size_t k = 0; k < out.size(); ++k)
+      for (int j = 0; j < kNumJoints; ++j) {
+        if (k > 0) z[j] = dahl_state(z[j], q[k][j] - q[k - 1][j], presliding_distance);
+        out[k][j] = hysteresis_torque(1.0, z[j], dq[k][j]);
+      }
+    return out;
+  }
+  // Presliding distances up to a few hundredths of a radian; a longer memory would be a sliding
+  // law delayed after each reversal, i.e. joint_friction.
+  std::vector<double> grid() const override { return {0.003, 0.005, 0.008, 0.012, 0.02, 0.03, 0.05}; }
+};
+
 }  // namespace
 
 double friction_law(double phi1, double phi2, double phi3, double viscous, double dq) {
   return gaz_friction(phi1, phi2, phi3, dq) + viscous * dq;
+}
+
+double smooth_sign(double dq) { return std::tanh(dq / kSignVelocity); }
+
+double stribeck_excess(double excess, double stribeck_velocity, double dq) {
+  const double x = dq / stribeck_velocity;
+  return excess * smooth_sign(dq) * std::exp(-x * x);
+}
+
+double position_ripple(double a, double b, double period, double q) {
+  const double x = 2.0 * M_PI * q / period;
+  return a * std::sin(x) + b * std::cos(x);
+}
+
+// On a step of constant sign s the Dahl equation dz/dq = (s - z) / x0 is linear: z relaxes to s
+// as exp(-|dq| / x0).
+double dahl_state(double z, double position_step, double presliding_distance) {
+  if (position_step == 0.0) return z;
+  const double s = position_step > 0.0 ? 1.0 : -1.0;
+  return s + (z - s) * std::exp(-std::abs(position_step) / presliding_distance);
+}
+
+double hysteresis_torque(double amplitude, double z, double dq) { return amplitude * (z - smooth_sign(dq)); }
+
+double load_friction(double coefficient, double tau_transmitted, double dq) {
+  return coefficient * std::abs(tau_transmitted) * smooth_sign(dq);
 }
 
 MatrixXd Effect::jacobian(const Part& part, const VectorXd& theta) const {
@@ -285,6 +547,12 @@ std::vector<std::unique_ptr<Effect>> effect_library(const Model& model) {
   library.push_back(std::make_unique<BaseTilt>());
   library.push_back(std::make_unique<TimeDelay>());
   library.push_back(std::make_unique<InertialParameters>(model));
+  library.push_back(std::make_unique<SensorGain>());
+  library.push_back(std::make_unique<PositionRipple>());
+  library.push_back(std::make_unique<StaticFriction>());
+  library.push_back(std::make_unique<FrictionHysteresis>());
+  library.push_back(std::make_unique<LoadDependentFriction>());
+  library.push_back(std::make_unique<ThermalDrift>());
   return library;
 }
 

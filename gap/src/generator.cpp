@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/gap/effects.hpp"
 
 namespace csp::gap {
 
@@ -52,9 +53,36 @@ InjectedEffects realistic_effect(const std::string& name, const Model& model, un
       link.inertia *= 1.0 + uniform(engine, -0.2, 0.2);
     }
     truth.links = links;
+  } else if (name == "sensor_gain") {  // torque-sensor calibration off by 3-8 %
+    for (int j = 0; j < kNumJoints; ++j) truth.sensor_gain[j] = random_sign(engine) * uniform(engine, 0.03, 0.08);
+  } else if (name == "position_ripple") {  // gear / cogging ripple, periods the 10 Hz filter passes
+    for (int j = 0; j < kNumJoints; ++j) {
+      truth.ripple_amplitude[j] = uniform(engine, 0.2, 0.5);
+      truth.ripple_period[j] = uniform(engine, 0.15, 0.6);
+      truth.ripple_phase[j] = uniform(engine, 0.0, 2.0 * M_PI);
+    }
+  } else if (name == "static_friction") {  // breakaway 0.5-1 N m above the sliding level
+    for (int j = 0; j < kNumJoints; ++j) truth.breakaway_excess[j] = uniform(engine, 0.5, 1.0);
+    truth.stribeck_velocity = uniform(engine, 0.03, 0.08);
+  } else if (name == "friction_hysteresis") {  // presliding memory of 0.3-0.8 N m over 5-30 mrad
+    for (int j = 0; j < kNumJoints; ++j) truth.hysteresis_amplitude[j] = uniform(engine, 0.3, 0.8);
+    truth.presliding_distance = uniform(engine, 0.005, 0.03);
+  } else if (name == "load_dependent_friction") {  // 2-5 % of the transmitted torque
+    for (int j = 0; j < kNumJoints; ++j) truth.load_friction[j] = uniform(engine, 0.02, 0.05);
+  } else if (name == "thermal_drift") {  // warm-up after power-on: 1-3 N m per minute
+    for (int j = 0; j < kNumJoints; ++j) truth.drift_rate[j] = random_sign(engine) * uniform(engine, 1.0, 3.0) / 60.0;
   } else {
     throw std::invalid_argument("unknown effect `" + name + "`");
   }
+  return truth;
+}
+
+InjectedEffects outside_library_effect(unsigned seed) {
+  std::mt19937_64 engine(seed);
+  InjectedEffects truth;
+  truth.vibration_joint = 1 + static_cast<int>(seed % kNumJoints);
+  truth.vibration_amplitude = uniform(engine, 0.4, 0.7);
+  truth.vibration_frequency = uniform(engine, 2.0, 3.0);
   return truth;
 }
 
@@ -66,6 +94,17 @@ InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b) {
   m.armature += b.armature;
   m.tilt_x += b.tilt_x, m.tilt_y += b.tilt_y, m.delay += b.delay;
   if (b.links) m.links = b.links;
+  m.sensor_gain += b.sensor_gain;
+  if (!b.ripple_amplitude.isZero())
+    m.ripple_amplitude = b.ripple_amplitude, m.ripple_period = b.ripple_period, m.ripple_phase = b.ripple_phase;
+  if (!b.breakaway_excess.isZero()) m.breakaway_excess = b.breakaway_excess, m.stribeck_velocity = b.stribeck_velocity;
+  if (!b.hysteresis_amplitude.isZero())
+    m.hysteresis_amplitude = b.hysteresis_amplitude, m.presliding_distance = b.presliding_distance;
+  m.load_friction += b.load_friction;
+  m.drift_rate += b.drift_rate;
+  if (b.vibration_joint)
+    m.vibration_joint = b.vibration_joint, m.vibration_amplitude = b.vibration_amplitude,
+    m.vibration_frequency = b.vibration_frequency;
   return m;
 }
 
@@ -127,16 +166,31 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
   log.source = "generated (trajectory seed " + std::to_string(trajectory_seed) + ")";
   Data data;
   const double dt = 1.0 / options.rate;
+  Vector7 z = Vector7::Zero(), q_previous;  // Dahl's friction state along the sensed motion
   for (double t = 0.0; t <= options.duration; t += dt * (1.0 + uniform(engine, -0.1, 0.1))) {
-    Vector7 q, dq, ddq, tau;
+    Vector7 q, dq, ddq, rigid;
     trajectory.state(t, q, dq, ddq);
     log.t.push_back(t);
     log.q.push_back(q + noise(Vector7::Constant(options.position_noise)));
     log.dq.push_back(dq + noise(Vector7::Constant(options.velocity_noise)));
     trajectory.state(t - truth.delay, q, dq, ddq);  // the torque the sensor reports now
-    rnea(true_model, data, q, dq, ddq, tau);
-    tau += friction_torque(p.friction, dq) + friction_torque(truth.friction, dq) + truth.armature.cwiseProduct(ddq) +
-           truth.sensor_offset;
+    rnea(true_model, data, q, dq, ddq, rigid);
+    Vector7 tau = rigid + friction_torque(p.friction, dq) + friction_torque(truth.friction, dq) +
+                  truth.armature.cwiseProduct(ddq);
+    for (int j = 0; j < kNumJoints; ++j) {
+      z[j] = log.t.size() == 1 ? smooth_sign(dq[j]) : dahl_state(z[j], q[j] - q_previous[j], truth.presliding_distance);
+      tau[j] += position_ripple(truth.ripple_amplitude[j] * std::cos(truth.ripple_phase[j]),
+                                truth.ripple_amplitude[j] * std::sin(truth.ripple_phase[j]), truth.ripple_period[j], q[j]) +
+                stribeck_excess(truth.breakaway_excess[j], truth.stribeck_velocity, dq[j]) +
+                hysteresis_torque(truth.hysteresis_amplitude[j], z[j], dq[j]) +
+                load_friction(truth.load_friction[j], rigid[j], dq[j]);
+    }
+    q_previous = q;
+    if (truth.vibration_joint)
+      tau[truth.vibration_joint - 1] +=
+          truth.vibration_amplitude * std::sin(2.0 * M_PI * truth.vibration_frequency * t);
+    // What the sensor reports: scaled, offset, drifting since the log began.
+    tau = tau + truth.sensor_gain.cwiseProduct(tau) + truth.sensor_offset + truth.drift_rate * t;
     log.tau_J.push_back(tau + noise(options.torque_noise));
   }
   return log;

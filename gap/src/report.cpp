@@ -46,6 +46,7 @@ std::string summary(const Diagnosis& d) {
   out += "\n                             after ";
   for (int j = 0; j < kNumJoints; ++j) out += format(" %.3f", d.verdict_heldout_rms_after[j]);
   out += format("\nunexplained: %.1f%% of the held-out mean square\n", 100 * d.unexplained_fraction);
+  for (const UnexplainedStructure& u : d.unexplained) out += "  " + u.detail + "\n";
   return out;
 }
 
@@ -81,7 +82,30 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
     ranking.bar_labels.push_back(
         format("%s %.1f%%%s", e.name.c_str(), 100 * e.explained_fraction, e.significant ? " *" : ""));
   }
+  // What stays unexplained: the held-out residual after the causes against the variable of its
+  // strongest structure, one panel per localised joint.
+  const Eigen::VectorXd left = h.residual - d.verdict_heldout_torque;
+  std::vector<PlotPanel> unexplained;
+  for (const UnexplainedStructure& u : d.unexplained) {
+    const int j = u.joint - 1;
+    std::vector<double> x;
+    std::string axis = "t [s]";
+    for (std::size_t k = 0; k < h.samples.size(); ++k) {
+      if (u.kind == "position_periodic") x.push_back(h.samples.q[k][j]), axis = format("q%d [rad]", u.joint);
+      else if (u.kind == "velocity_sign" || u.kind == "velocity" || u.kind == "hysteresis")
+        x.push_back(h.samples.dq[k][j]), axis = format("dq%d [rad/s]", u.joint);
+      else if (u.kind == "acceleration") x.push_back(h.samples.ddq[k][j]), axis = format("ddq%d [rad/s^2]", u.joint);
+      else if (u.kind == "torque_level") x.push_back(h.predicted[k][j]), axis = "model torque [N m]";
+      else x.push_back(h.samples.t[k]);
+    }
+    PlotPanel p{format("joint %d: %s", u.joint, u.kind.c_str()), axis, "residual left [N m]", {}, {}};
+    p.series.push_back({"held out, after the causes", "#9467bd", x, joint_series(left, j), u.kind != "time_periodic"});
+    unexplained.push_back(p);
+  }
   const fs::path folder(dir);
+  if (!unexplained.empty())
+    write_text_file((folder / "unexplained.svg").string(),
+                    render_panels("What stays unexplained, by joint and kind", unexplained, 2));
   write_text_file((folder / "torque_heldout.svg").string(),
                   render_panels("Held-out part: measured vs predicted joint torque", torque, 2));
   write_text_file((folder / "residual_vs_velocity.svg").string(),
@@ -102,6 +126,8 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
   md +=
       joint_row("simulator model", d.baseline_heldout_rms) + joint_row("with the causes", d.verdict_heldout_rms_after);
   md += format("\nUnexplained: %.1f %% of the held-out mean square remains.\n\n", 100 * d.unexplained_fraction);
+  for (const UnexplainedStructure& u : d.unexplained) md += "- " + u.detail + "\n";
+  if (!d.unexplained.empty()) md += "\n![unexplained](unexplained.svg)\n\n";
   md += "![torque](torque_heldout.svg)\n\n## Effects, each alone\n\n";
   md += "| effect | parameters | explained | random regressors | significant | joints |\n|---|---|---|---|---|---|\n";
   for (const EffectResult& e : d.effects) {

@@ -63,19 +63,27 @@ Samples filter_log(const JointLog& log, const FilterOptions& options) {
   const std::vector<Vector7> q = resample(log.t, log.q, dt, n), dq = resample(log.t, log.dq, dt, n),
                              tau = resample(log.t, log.tau_J, dt, n);
   const std::vector<Vector7> ddq = log.ddq.empty() ? std::vector<Vector7>{} : resample(log.t, log.ddq, dt, n);
-  const SavitzkyGolay filter(half_width, options.order, dt);
+  const auto filter = std::make_shared<const SavitzkyGolay>(half_width, options.order, dt);
 
   Samples s;
   s.source = log.source;
   for (std::size_t k = half_width; k + half_width < n; k += stride) {
     s.t.push_back(log.t.front() + static_cast<double>(k) * dt);
-    s.q.push_back(filter.apply(q, k, 0));
-    s.dq.push_back(filter.apply(dq, k, 0));
-    s.ddq.push_back(ddq.empty() ? filter.apply(dq, k, 1) : filter.apply(ddq, k, 0));
-    s.tau.push_back(filter.apply(tau, k, 0));
-    s.dtau.push_back(filter.apply(tau, k, 1));
+    s.q.push_back(filter->apply(q, k, 0));
+    s.dq.push_back(filter->apply(dq, k, 0));
+    s.ddq.push_back(ddq.empty() ? filter->apply(dq, k, 1) : filter->apply(ddq, k, 0));
+    s.tau.push_back(filter->apply(tau, k, 0));
+    s.dtau.push_back(filter->apply(tau, k, 1));
+    s.grid_index.push_back(k);
   }
+  s.grid_q = q, s.grid_dq = dq, s.filter = filter;
   return s;
+}
+
+std::vector<Vector7> Samples::smoothed(const std::vector<Vector7>& grid_series) const {
+  std::vector<Vector7> out(grid_index.size());
+  for (std::size_t k = 0; k < out.size(); ++k) out[k] = filter->apply(grid_series, grid_index[k], 0);
+  return out;
 }
 
 }  // namespace csp::gap

@@ -46,6 +46,18 @@ struct JointGap {
 };
 inline constexpr std::array<double, 3> kBandEdges = {0.5, 2.0, 5.0};
 
+// What stays unexplained after the verdict, localised: the strongest structure of one joint's
+// held-out residual (docs/gap.md lists the kinds and the rules).
+struct UnexplainedStructure {
+  int joint = 0;        // 1-based
+  std::string kind;     // offset, time_drift, time_periodic, position_periodic, velocity_sign, velocity,
+                        // hysteresis, acceleration, torque_level, high_frequency
+  double size = 0.0;    // RMS of the structure's fitted torque [N m]
+  double share = 0.0;   // of the joint's remaining held-out mean square it accounts for
+  double value = 0.0;   // the structure's parameter: period [rad], frequency [Hz], slope, ...
+  std::string detail;   // one plain sentence
+};
+
 struct Diagnosis {
   Part train, heldout;
   Vector7 baseline_train_rms = Vector7::Zero(), baseline_heldout_rms = Vector7::Zero();
@@ -53,11 +65,20 @@ struct Diagnosis {
   std::vector<EffectResult> effects;  // each effect alone, best held-out improvement first
   std::vector<EffectResult> steps;    // forward selection: the set after each added cause
   std::vector<std::string> causes;    // the selected effects, most important first
+  std::vector<std::string> dropped;   // selected, then dropped: not significant once the later causes were in
   Vector7 verdict_heldout_rms_after = Vector7::Zero();
   double unexplained_fraction = 1.0;       // held-out mean square left by the selected causes
   nlohmann::json verdict_params;           // the causes' parameters fitted together
   Eigen::VectorXd verdict_heldout_torque;  // the causes' torque on the held-out part (stacked)
+  std::vector<UnexplainedStructure> unexplained;  // strongest first
 };
+
+// The structures of the residual `left` (stacked, on `part`) that account for at least
+// kUnexplainedShare of a joint's mean square and kUnexplainedSize of torque; `causes` are the
+// selected effects (a structure a library effect could model but which was not selected says so).
+inline constexpr double kUnexplainedShare = 0.3, kUnexplainedSize = 0.03;  // [-], [N m]
+std::vector<UnexplainedStructure> localise_unexplained(const Part& part, const Eigen::VectorXd& left,
+                                                       const std::vector<std::string>& causes);
 
 Diagnosis diagnose(const Model& model, const JointLog& train, const JointLog& heldout,
                    const DiagnosisOptions& options = {});

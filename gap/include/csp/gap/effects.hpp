@@ -37,14 +37,46 @@ class LinearEffect : public Effect {
   Eigen::VectorXd initial_guess(const Part& part, const Eigen::VectorXd& target) const override;
 };
 
-inline constexpr std::array<const char*, 7> kEffectNames = {
-    "joint_friction", "sensor_offset", "payload", "armature", "base_tilt", "time_delay", "inertial_parameters"};
+inline constexpr std::array<const char*, 13> kEffectNames = {
+    "joint_friction", "sensor_offset",   "payload",         "armature",           "base_tilt",
+    "time_delay",     "inertial_parameters", "sensor_gain", "position_ripple",    "static_friction",
+    "friction_hysteresis", "load_dependent_friction", "thermal_drift"};
 
-// joint_friction, sensor_offset, payload, armature, base_tilt, time_delay, inertial_parameters,
-// in this order. The model is the diagnosing model (for the payload frame and the base parameters).
+// The effects of kEffectNames, in that order. The model is the diagnosing model (for the payload
+// frame and the base parameters).
 std::vector<std::unique_ptr<Effect>> effect_library(const Model& model);
 
-// Gaz et al. sigmoid plus viscous friction of one joint: the joint_friction effect's law.
+// The effects' laws, shared by the library (which fits them) and the generator (which injects them
+// into "real" logs). Each is one joint's torque [N m].
+
+// joint_friction: Gaz et al. sigmoid plus viscous friction.
 double friction_law(double phi1, double phi2, double phi3, double viscous, double dq);
+
+// The sign of a velocity, smoothed over kSignVelocity: sensors never report an exact zero and a
+// hard sign would make a fitted law jump with the noise.
+inline constexpr double kSignVelocity = 0.005;  // [rad/s]
+double smooth_sign(double dq);
+
+// static_friction: the breakaway excess above the Coulomb level near zero velocity (Stribeck),
+// excess sgn(dq) exp(-(dq / stribeck_velocity)^2). The excess is positive: static friction is
+// never below the sliding level.
+double stribeck_excess(double excess, double stribeck_velocity, double dq);
+
+// position_ripple: a torque periodic in the joint's position (harmonic-drive / cogging ripple),
+// a sin(2 pi q / period) + b cos(2 pi q / period).
+double position_ripple(double a, double b, double period, double q);
+
+// friction_hysteresis: Dahl's friction state z in [-1, 1] (Dahl 1968; Armstrong-Helouvry et al.
+// 1994): dz/dq = (1 - z sgn(dq)) / presliding_distance, so the friction force follows position
+// with memory after each reversal instead of jumping with the velocity's sign. dahl_state advances z
+// over a monotone position step exactly. The effect is the part of Dahl's force the sliding
+// (Coulomb) law does not have, amplitude (z - sgn(dq)): zero once the joint has slid well past the
+// presliding distance, a lag of the friction behind each reversal before that.
+double dahl_state(double z, double position_step, double presliding_distance);
+double hysteresis_torque(double amplitude, double z, double dq);
+
+// load_dependent_friction: friction growing with the torque the gear transmits,
+// coefficient |tau_transmitted| sgn(dq) (the mesh's normal force grows with the load).
+double load_friction(double coefficient, double tau_transmitted, double dq);
 
 }  // namespace csp::gap

@@ -1,7 +1,6 @@
 // "Real" logs for checking the diagnosis on data whose effect is known: a truth model = the
 // diagnosing model plus injected effects, driven along a Fourier excitation trajectory within the
-// joint limits, with sensor noise like the real Panda log's. Built on the dynamics core only (the
-// rt/ emulator does not exist yet).
+// joint limits, with sensor noise like the real Panda log's. Built on the dynamics core only.
 #pragma once
 
 #include <optional>
@@ -21,10 +20,26 @@ struct InjectedEffects {
   double tilt_x = 0.0, tilt_y = 0.0;                              // base rotation about base x, then y [rad]
   double delay = 0.0;                                             // the torque sensor reads tau(t - delay) [s]
   std::optional<std::array<RigidBodyInertia, kNumJoints>> links;  // the true inertial parameters
+  Vector7 sensor_gain = Vector7::Zero();                          // the sensor reads (1 + g) tau
+  Vector7 ripple_amplitude = Vector7::Zero();                     // [N m], periodic in q
+  Vector7 ripple_period = Vector7::Ones();                        // [rad]
+  Vector7 ripple_phase = Vector7::Zero();                         // [rad]
+  Vector7 breakaway_excess = Vector7::Zero();                     // static friction above Coulomb [N m]
+  double stribeck_velocity = 0.05;                                // [rad/s]
+  Vector7 hysteresis_amplitude = Vector7::Zero();                 // Dahl friction's memory [N m]
+  double presliding_distance = 0.02;                              // [rad]
+  Vector7 load_friction = Vector7::Zero();                        // friction per N m transmitted
+  Vector7 drift_rate = Vector7::Zero();                           // sensor offset drift [N m/s]
+  // Outside every library effect on purpose (the check that the diagnosis names no false cause and
+  // localises what it cannot name): a structural vibration of one joint at a fixed frequency.
+  int vibration_joint = 0;                                        // 1..7; 0 = none
+  double vibration_amplitude = 0.0, vibration_frequency = 0.0;    // [N m], [Hz]
 };
 
 // One effect of the library (docs/gap.md lists the sizes), or "none", drawn with `seed`.
 InjectedEffects realistic_effect(const std::string& name, const Model& model, unsigned seed);
+// The effect kept out of the library: a vibration of 0.4-0.7 N m at 2-3 Hz on joint 1 + seed % 7.
+InjectedEffects outside_library_effect(unsigned seed);
 // Both injections (each sets different fields).
 InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b);
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 
 #include "csp/io/joint_log.hpp"
 
@@ -38,6 +39,15 @@ struct Samples {
   std::vector<Vector7> tau;         // filtered measured torque
   std::vector<Vector7> dtau;        // its time derivative
   std::size_t size() const { return t.size(); }
+
+  // The uniform grid before smoothing, for laws with features faster than the filter (a friction
+  // change within a few hundredths of a rad/s): such a law must be evaluated on the grid and then
+  // smoothed, as the measured torque was, not evaluated on the smoothed motion.
+  std::vector<Vector7> grid_q, grid_dq;
+  std::vector<std::size_t> grid_index;           // grid index of each sample
+  std::shared_ptr<const SavitzkyGolay> filter;   // the smoothing filter of the samples
+  // A series on the grid smoothed at each sample's grid index, as the measured torque is.
+  std::vector<Vector7> smoothed(const std::vector<Vector7>& grid_series) const;
 };
 
 // Throws JointLogError when the log is too short for the filter window.
