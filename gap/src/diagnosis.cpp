@@ -379,11 +379,12 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   // on the held-out one, and also fitted on the held-out part and judged on the training one. The
   // weakest cause that fails is dropped and the rest refitted, until all pass.
   const RandomRegressors random_swapped(heldout, train, options.seed);
-  auto passes = [&](const EffectSet& set, const Effect* effect, const VectorXd& theta, const Part& fit_on,
+  // Whether `effect` of the jointly fitted `with` passes against the set without it.
+  auto passes = [&](const EffectSet& set, const Effect* effect, const SetFit& with, const Part& fit_on,
                     const Part& judge_on, const RandomRegressors& null, double& improvement) {
     EffectSet others;
-    const VectorXd start = without_effect(set, theta, effect, others);
-    const SetFit with = fit_set(set, fit_on, judge_on, theta), without = fit_set(others, fit_on, judge_on, start);
+    const VectorXd start = without_effect(set, with.theta, effect, others);
+    const SetFit without = fit_set(others, fit_on, judge_on, start);
     improvement = explained(without.heldout_left, with.heldout_left);
     return improvement > null.best_improvement(effect->size(), options.null_draws, without.train_left,
                                                without.heldout_left) &&
@@ -393,11 +394,13 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
     dropped = false;
     double weakest = std::numeric_limits<double>::infinity();
     std::size_t weakest_at = 0;
+    const SetFit swapped_fit = fit_set(selected, heldout, train, current.theta);
     for (std::size_t i = 0; i < selected.size(); ++i) {
-      double forward = 0.0, swapped = 0.0;
-      const bool significant = passes(selected, selected[i], current.theta, train, heldout, random, forward) &&
-                               passes(selected, selected[i], current.theta, heldout, train, random_swapped, swapped);
-      if (!significant && std::min(forward, swapped) < weakest) weakest = std::min(forward, swapped), weakest_at = i;
+      double improvement = 0.0;
+      const bool significant =
+          passes(selected, selected[i], current, train, heldout, random, improvement) &&
+          passes(selected, selected[i], swapped_fit, heldout, train, random_swapped, improvement);
+      if (!significant && improvement < weakest) weakest = improvement, weakest_at = i;
     }
     if (std::isfinite(weakest)) {
       d.dropped.push_back(selected[weakest_at]->name());

@@ -382,20 +382,28 @@ class AmplitudesAndShape : public Effect {
  public:
   int size() const override { return kNumJoints + 1; }
   VectorXd torque(const Part& part, const VectorXd& theta) const override {
-    const std::vector<Vector7> shape = shapes(part, shared_parameter(theta[kNumJoints]));
-    VectorXd tau(part.rows());
+    return scaled(shapes(part, shared_parameter(theta[kNumJoints])), theta);
+  }
+  // The amplitudes' columns exactly; the shared parameter's by a forward difference.
+  MatrixXd jacobian(const Part& part, const VectorXd& theta) const override {
+    const double step = 1e-6 * std::max(1.0, std::abs(theta[kNumJoints]));
+    MatrixXd J(part.rows(), size());
+    const VectorXd here = torque(part, theta);
+    const std::vector<Vector7>& shape = shapes(part, shared_parameter(theta[kNumJoints]));
     for (Eigen::Index r = 0; r < part.rows(); ++r) {
+      J.row(r).setZero();
       const int j = static_cast<int>(r % kNumJoints);
-      tau[r] = amplitude(theta[j]) * shape[static_cast<std::size_t>(r / kNumJoints)][j];
+      J(r, j) = amplitude_derivative(theta[j]) * shape[static_cast<std::size_t>(r / kNumJoints)][j];
     }
-    return tau;
+    J.col(kNumJoints) = (scaled(shapes(part, shared_parameter(theta[kNumJoints] + step)), theta) - here) / step;
+    return J;
   }
   // The best shared parameter on a grid, with the amplitudes by least squares per joint.
   VectorXd initial_guess(const Part& part, const VectorXd& target) const override {
     VectorXd theta(size());
     double best = std::numeric_limits<double>::infinity();
     for (double shared : grid()) {
-      const std::vector<Vector7> shape = shapes(part, shared);
+      const std::vector<Vector7>& shape = shapes(part, shared);
       double rss = 0.0;
       Vector7 amplitudes;
       for (int j = 0; j < kNumJoints; ++j) {
@@ -421,16 +429,42 @@ class AmplitudesAndShape : public Effect {
     const std::vector<double> g = grid();
     return std::clamp(std::exp(ln_value), g.front(), g.back());
   }
-  // Each sample's shape per joint for the shared parameter (a velocity or distance, > 0).
-  std::vector<Vector7> shapes(const Part& part, double shared) const {
-    return part.samples.smoothed(grid_shapes(part.samples, shared));
+  // Each sample's shape per joint for the shared parameter (a velocity or distance, > 0). A fit
+  // changes the amplitudes far more often than the shared parameter, and the shapes cost most of a
+  // diagnosis (a law and the smoothing filter on every grid point), so the last two are kept.
+  const std::vector<Vector7>& shapes(const Part& part, double shared) const {
+    for (const ShapeCache& c : cache_)
+      if (c.samples == &part.samples && c.shared == shared && c.size == part.samples.size()) return c.shape;
+    ShapeCache& c = cache_[next_cache_];
+    next_cache_ = (next_cache_ + 1) % cache_.size();
+    c = {&part.samples, shared, part.samples.size(), part.samples.smoothed(grid_shapes(part.samples, shared))};
+    return c.shape;
   }
   // The shape on the uniform grid (Samples::grid_q, grid_dq).
   virtual std::vector<Vector7> grid_shapes(const Samples& samples, double shared) const = 0;
   virtual std::vector<double> grid() const = 0;
-  // The amplitude from its parameter, and the parameter from a least-squares amplitude.
+  // The amplitude from its parameter, its derivative, and the parameter from a least-squares amplitude.
   virtual double amplitude(double parameter) const { return parameter; }
+  virtual double amplitude_derivative(double /*parameter*/) const { return 1.0; }
   virtual double parameter_of(double amplitude) const { return amplitude; }
+
+ private:
+  VectorXd scaled(const std::vector<Vector7>& shape, const VectorXd& theta) const {
+    VectorXd tau(kNumJoints * static_cast<Eigen::Index>(shape.size()));
+    for (Eigen::Index r = 0; r < tau.size(); ++r) {
+      const int j = static_cast<int>(r % kNumJoints);
+      tau[r] = amplitude(theta[j]) * shape[static_cast<std::size_t>(r / kNumJoints)][j];
+    }
+    return tau;
+  }
+  struct ShapeCache {
+    const Samples* samples = nullptr;
+    double shared = 0.0;
+    std::size_t size = 0;
+    std::vector<Vector7> shape;
+  };
+  mutable std::array<ShapeCache, 4> cache_;
+  mutable std::size_t next_cache_ = 0;
 };
 
 // --- static_friction: per joint s_j sgn(dq) exp(-(dq / v_s)^2), s_j > 0 (as ln s_j), shared v_s --
@@ -455,6 +489,7 @@ class StaticFriction : public AmplitudesAndShape {
   // would be a sliding (Coulomb) law, which is joint_friction's.
   std::vector<double> grid() const override { return {0.01, 0.015, 0.02, 0.03, 0.045, 0.07, 0.1}; }
   double amplitude(double parameter) const override { return std::exp(parameter); }
+  double amplitude_derivative(double parameter) const override { return std::exp(parameter); }
   double parameter_of(double amplitude) const override { return std::log(std::max(amplitude, 1e-3)); }
 };
 
