@@ -24,35 +24,49 @@ std::vector<double> values(const VectorXd& v, Eigen::Index begin, Eigen::Index c
   return out;
 }
 
-// --- sensor_offset: a constant bias per joint torque sensor -------------------------------------
-class SensorOffset : public LinearEffect {
+// A linear effect with one parameter per joint: joint j's torque is theta_j x_j(sample k).
+// `parameter` names theta in the JSON, in units of `scale` theta.
+class PerJointLinearEffect : public LinearEffect {
  public:
-  std::string name() const override { return "sensor_offset"; }
-  int size() const override { return kNumJoints; }
-  MatrixXd regressor(const Part& part) const override {
-    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
-    for (Eigen::Index r = 0; r < part.rows(); ++r) Y(r, r % kNumJoints) = 1.0;
-    return Y;
-  }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
-    return {{"offset_Nm", values(theta, 0, kNumJoints)}, {"offset_Nm_sigma", values(sigma, 0, kNumJoints)}};
-  }
-};
-
-// --- armature: rotor inertia reflected to the link side, I_a,j ddq_j -----------------------------
-class Armature : public LinearEffect {
- public:
-  std::string name() const override { return "armature"; }
+  PerJointLinearEffect(std::string name, std::string parameter, double scale)
+      : name_(std::move(name)), parameter_(std::move(parameter)), scale_(scale) {}
+  std::string name() const override { return name_; }
   int size() const override { return kNumJoints; }
   MatrixXd regressor(const Part& part) const override {
     MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
     for (std::size_t k = 0; k < part.samples.size(); ++k)
-      for (int j = 0; j < kNumJoints; ++j) Y(rows_of(static_cast<int>(k)) + j, j) = part.samples.ddq[k][j];
+      for (int j = 0; j < kNumJoints; ++j) Y(rows_of(static_cast<int>(k)) + j, j) = x(part, k, j);
     return Y;
   }
   nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
-    return {{"inertia_kgm2", values(theta, 0, kNumJoints)}, {"inertia_kgm2_sigma", values(sigma, 0, kNumJoints)}};
+    return {{parameter_, values(scale_ * theta, 0, kNumJoints)},
+            {parameter_ + "_sigma", values(scale_ * sigma, 0, kNumJoints)}};
   }
+
+ protected:
+  virtual double x(const Part& part, std::size_t k, int j) const = 0;
+
+ private:
+  std::string name_, parameter_;
+  double scale_;
+};
+
+// --- sensor_offset: a constant bias per joint torque sensor -------------------------------------
+class SensorOffset : public PerJointLinearEffect {
+ public:
+  SensorOffset() : PerJointLinearEffect("sensor_offset", "offset_Nm", 1.0) {}
+
+ protected:
+  double x(const Part&, std::size_t, int) const override { return 1.0; }
+};
+
+// --- armature: rotor inertia reflected to the link side, I_a,j ddq_j -----------------------------
+class Armature : public PerJointLinearEffect {
+ public:
+  Armature() : PerJointLinearEffect("armature", "inertia_kgm2", 1.0) {}
+
+ protected:
+  double x(const Part& part, std::size_t k, int j) const override { return part.samples.ddq[k][j]; }
 };
 
 // --- base_tilt: gravity direction off by small rotations about base x and y ----------------------
@@ -257,55 +271,33 @@ class JointFriction : public Effect {
 // --- sensor_gain: each torque sensor reads (1 + g_j) times the true torque ---------------------
 // The residual is then g_j tau_j; the model's predicted torque stands in for tau_j (the gain is a
 // few per cent, so the error of that stand-in is second order).
-class SensorGain : public LinearEffect {
+class SensorGain : public PerJointLinearEffect {
  public:
-  std::string name() const override { return "sensor_gain"; }
-  int size() const override { return kNumJoints; }
-  MatrixXd regressor(const Part& part) const override {
-    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
-    for (std::size_t k = 0; k < part.samples.size(); ++k)
-      for (int j = 0; j < kNumJoints; ++j) Y(rows_of(static_cast<int>(k)) + j, j) = part.predicted[k][j];
-    return Y;
-  }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
-    return {{"gain_error_percent", values(100.0 * theta, 0, kNumJoints)},
-            {"gain_error_percent_sigma", values(100.0 * sigma, 0, kNumJoints)}};
-  }
+  SensorGain() : PerJointLinearEffect("sensor_gain", "gain_error_percent", 100.0) {}
+
+ protected:
+  double x(const Part& part, std::size_t k, int j) const override { return part.predicted[k][j]; }
 };
 
 // --- thermal_drift: a sensor offset that drifts linearly over the log, rate_j t -----------------
 // t is the log's own time (from its first row), so a log split in two keeps one drift. A drift
 // that started before the log adds a constant: that part is sensor_offset's.
-class ThermalDrift : public LinearEffect {
+class ThermalDrift : public PerJointLinearEffect {
  public:
-  std::string name() const override { return "thermal_drift"; }
-  int size() const override { return kNumJoints; }
-  MatrixXd regressor(const Part& part) const override {
-    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
-    for (std::size_t k = 0; k < part.samples.size(); ++k)
-      for (int j = 0; j < kNumJoints; ++j) Y(rows_of(static_cast<int>(k)) + j, j) = part.samples.t[k];
-    return Y;
-  }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
-    return {{"drift_Nm_per_min", values(60.0 * theta, 0, kNumJoints)},
-            {"drift_Nm_per_min_sigma", values(60.0 * sigma, 0, kNumJoints)}};
-  }
+  ThermalDrift() : PerJointLinearEffect("thermal_drift", "drift_Nm_per_min", 60.0) {}
+
+ protected:
+  double x(const Part& part, std::size_t k, int) const override { return part.samples.t[k]; }
 };
 
 // --- load_dependent_friction: coefficient_j |tau_j| sgn(dq_j), tau_j the model's torque ---------
-class LoadDependentFriction : public LinearEffect {
+class LoadDependentFriction : public PerJointLinearEffect {
  public:
-  std::string name() const override { return "load_dependent_friction"; }
-  int size() const override { return kNumJoints; }
-  MatrixXd regressor(const Part& part) const override {
-    MatrixXd Y = MatrixXd::Zero(part.rows(), kNumJoints);
-    for (std::size_t k = 0; k < part.samples.size(); ++k)
-      for (int j = 0; j < kNumJoints; ++j)
-        Y(rows_of(static_cast<int>(k)) + j, j) = load_friction(1.0, part.predicted[k][j], part.samples.dq[k][j]);
-    return Y;
-  }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
-    return {{"coefficient", values(theta, 0, kNumJoints)}, {"coefficient_sigma", values(sigma, 0, kNumJoints)}};
+  LoadDependentFriction() : PerJointLinearEffect("load_dependent_friction", "coefficient", 1.0) {}
+
+ protected:
+  double x(const Part& part, std::size_t k, int j) const override {
+    return load_friction(1.0, part.predicted[k][j], part.samples.dq[k][j]);
   }
 };
 
