@@ -379,11 +379,10 @@ class AmplitudesAndShape : public Effect {
   // The amplitudes' columns exactly; the shared parameter's by a forward difference.
   MatrixXd jacobian(const Part& part, const VectorXd& theta) const override {
     const double step = 1e-6 * std::max(1.0, std::abs(theta[kNumJoints]));
-    MatrixXd J(part.rows(), size());
+    MatrixXd J = MatrixXd::Zero(part.rows(), size());
     const VectorXd here = torque(part, theta);
     const std::vector<Vector7>& shape = shapes(part, shared_parameter(theta[kNumJoints]));
     for (Eigen::Index r = 0; r < part.rows(); ++r) {
-      J.row(r).setZero();
       const int j = static_cast<int>(r % kNumJoints);
       J(r, j) = amplitude_derivative(theta[j]) * shape[static_cast<std::size_t>(r / kNumJoints)][j];
     }
