@@ -188,6 +188,23 @@ TEST(Hand, HomingMeasuresTheMaximumWidth) {
   EXPECT_NEAR(taken, settings.reaction_time + (0.05 + 0.08) / settings.homing_speed, kStep);
 }
 
+TEST(Hand, HomingThenGraspingTheScenarioObject) {
+  // libfranka's grasp_object with <homing> 1: the object is placed after homing, then grasped.
+  Hand hand(hand_with_object(0.03, 0.2));
+  const uint64_t homing = hand.homing();
+  run_until_answered(hand, homing);
+  EXPECT_EQ(hand.answer(homing), CommandStatus::kSuccess);
+  const uint64_t grasp = hand.grasp(0.03, 0.1, 60.0, 0.005, 0.005);
+  run_until_answered(hand, grasp);
+  EXPECT_EQ(hand.answer(grasp), CommandStatus::kSuccess);
+  // A second grasp at the width the fingers already rest at closes onto the object at once.
+  run_until_answered(hand, hand.stop());
+  const uint64_t again = hand.grasp(0.03, 0.1, 60.0, 0.005, 0.005);
+  const double taken = run_until_answered(hand, again);
+  EXPECT_EQ(hand.answer(again), CommandStatus::kSuccess);
+  EXPECT_NEAR(taken, HandSettings{}.reaction_time, kStep);
+}
+
 TEST(Hand, RefusesWhatTheHandCannotDo) {
   Hand hand{HandSettings{}};
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -26,6 +26,9 @@ constexpr Gripper::ServerVersion kServerVersion = 3;
 
 }  // namespace
 
+// The class holds only its opaque pointer: its layout never depends on the user's compile flags.
+static_assert(sizeof(Gripper) == sizeof(void*), "franka::Gripper must hold nothing but its Impl pointer");
+
 struct Gripper::Impl : WallClockDevice<csp::rt::Hand> {
   using WallClockDevice::WallClockDevice;
 };

@@ -39,6 +39,9 @@ const char* status_name(VacuumGripperDeviceStatus status) {
 
 }  // namespace
 
+// The class holds only its opaque pointer: its layout never depends on the user's compile flags.
+static_assert(sizeof(VacuumGripper) == sizeof(void*), "franka::VacuumGripper must hold nothing but its Impl pointer");
+
 struct VacuumGripper::Impl : WallClockDevice<csp::rt::VacuumPump> {
   using WallClockDevice::WallClockDevice;
 };

@@ -97,6 +97,7 @@ struct HandState {
 
 // The Franka Hand: two fingers moved together by one motor, opening width 0..max_width.
 //  - homing: close fully, then open fully at homing_speed; max_width becomes the measured width.
+//    The scenario's object is placed after homing: homing finds the fingers free.
 //  - move(width, speed): the fingers go to width at speed; they stop at an object in the way
 //    (the move then answers unsuccessful).
 //  - grasp(width, speed, force, eps_inner, eps_outer): the fingers close (or open, if width is
