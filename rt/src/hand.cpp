@@ -33,6 +33,15 @@ void require_range(double value, double low, double high, const char* name, cons
 
 uint16_t whole_degrees(double celsius) { return static_cast<uint16_t>(std::clamp(std::lround(celsius), 0L, 65535L)); }
 
+// The device sends its state as the next message once the state period is over.
+template <typename State>
+void publish_when_due(State now, State& published, double& next_state_in, double state_period) {
+  if (next_state_in > 0.0) return;
+  now.message_id = published.message_id + 1;
+  published = now;
+  next_state_in = state_period;
+}
+
 RigidBodyInertia point_mass(double mass, const Vector3& where) { return {mass, where, Matrix3::Zero()}; }
 
 }  // namespace
@@ -205,12 +214,7 @@ void Hand::step(double dt) {
       if (reaction_left_ <= 0.0) start();
     }
     if (arrives) arrive();
-    if (next_state_in_ <= 0.0) {
-      const uint64_t id = published_.message_id + 1;
-      published_ = state();
-      published_.message_id = id;
-      next_state_in_ = settings_.state_period;
-    }
+    publish_when_due(state(), published_, next_state_in_, settings_.state_period);
   }
 }
 
@@ -345,12 +349,7 @@ void VacuumPump::step(double dt) {
       if (reaction_left_ <= 0.0) start();
     }
     check_answer();
-    if (next_state_in_ <= 0.0) {
-      const uint64_t id = published_.message_id + 1;
-      published_ = state();
-      published_.message_id = id;
-      next_state_in_ = settings_.state_period;
-    }
+    publish_when_due(state(), published_, next_state_in_, settings_.state_period);
   }
 }
 

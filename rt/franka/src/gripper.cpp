@@ -1,25 +1,11 @@
 #include "franka/gripper.h"
 
-#include <filesystem>
-
-#include "csp/rt/scenario.hpp"
 #include "franka/exception.h"
 #include "wall_clock_device.hpp"
 
 namespace franka {
 
 namespace {
-
-// The hand of the robot at address: a scenario file's hand, else the Franka Hand with nothing
-// between its fingers.
-csp::rt::HandSettings hand_at(const std::string& address) {
-  if (!std::filesystem::is_regular_file(address)) return {};
-  try {
-    return csp::rt::load_scenario(address).hand;
-  } catch (const std::exception& e) {
-    throw NetworkException(std::string("libfranka gripper: cannot reach the hand of ") + address + ": " + e.what());
-  }
-}
 
 // The research-interface version of the hand's server (libfranka-common gripper kVersion).
 constexpr Gripper::ServerVersion kServerVersion = 3;
@@ -34,7 +20,7 @@ struct Gripper::Impl : WallClockDevice<csp::rt::Hand> {
 };
 
 Gripper::Gripper(const std::string& franka_address)
-    : impl_(std::make_unique<Impl>(hand_at(franka_address), "libfranka gripper")) {}
+    : impl_(std::make_unique<Impl>(franka_address, &csp::rt::Scenario::hand, "libfranka gripper")) {}
 Gripper::Gripper(Gripper&&) noexcept = default;
 Gripper& Gripper::operator=(Gripper&&) noexcept = default;
 Gripper::~Gripper() noexcept = default;

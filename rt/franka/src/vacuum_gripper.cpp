@@ -1,26 +1,11 @@
 #include "franka/vacuum_gripper.h"
 
-#include <filesystem>
-
-#include "csp/rt/scenario.hpp"
 #include "franka/exception.h"
 #include "wall_clock_device.hpp"
 
 namespace franka {
 
 namespace {
-
-// The pump of the robot at address: a scenario file's vacuum gripper, else a pump with no part
-// under its cup.
-csp::rt::VacuumSettings pump_at(const std::string& address) {
-  if (!std::filesystem::is_regular_file(address)) return {};
-  try {
-    return csp::rt::load_scenario(address).vacuum_gripper;
-  } catch (const std::exception& e) {
-    throw NetworkException(std::string("libfranka vacuum gripper: cannot reach the pump of ") + address + ": " +
-                           e.what());
-  }
-}
 
 // The research-interface version of the pump's server (libfranka-common vacuum_gripper kVersion).
 constexpr VacuumGripper::ServerVersion kServerVersion = 1;
@@ -47,7 +32,7 @@ struct VacuumGripper::Impl : WallClockDevice<csp::rt::VacuumPump> {
 };
 
 VacuumGripper::VacuumGripper(const std::string& franka_address)
-    : impl_(std::make_unique<Impl>(pump_at(franka_address), "libfranka vacuum gripper")) {}
+    : impl_(std::make_unique<Impl>(franka_address, &csp::rt::Scenario::vacuum_gripper, "libfranka vacuum gripper")) {}
 VacuumGripper::VacuumGripper(VacuumGripper&&) noexcept = default;
 VacuumGripper& VacuumGripper::operator=(VacuumGripper&&) noexcept = default;
 VacuumGripper::~VacuumGripper() noexcept = default;

@@ -6,22 +6,37 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <mutex>
 #include <string>
 #include <thread>
 
 #include "csp/rt/hand.hpp"
+#include "csp/rt/scenario.hpp"
 #include "franka/exception.h"
 
 namespace franka {
 
+// The device of the robot at address: the section of a scenario file given as address, or the
+// default device (nothing held) for any other address, e.g. an IP.
+template <typename Settings>
+Settings device_at(const std::string& address, Settings csp::rt::Scenario::*section, const std::string& who) {
+  if (!std::filesystem::is_regular_file(address)) return {};
+  try {
+    return csp::rt::load_scenario(address).*section;
+  } catch (const std::exception& e) {
+    throw NetworkException(who + ": cannot reach the device of " + address + ": " + e.what());
+  }
+}
+
 template <typename Device>
 class WallClockDevice {
  public:
-  // who: the prefix of libfranka's messages, e.g. "libfranka gripper".
+  // The device of the robot at address (device_at); who: libfranka's message prefix, e.g.
+  // "libfranka gripper".
   template <typename Settings>
-  WallClockDevice(const Settings& settings, std::string who)
-      : device_(settings), who_(std::move(who)), last_(std::chrono::steady_clock::now()) {}
+  WallClockDevice(const std::string& address, Settings csp::rt::Scenario::*section, std::string who)
+      : device_(device_at(address, section, who)), who_(std::move(who)), last_(std::chrono::steady_clock::now()) {}
 
   // Issues a command with issue(device) and waits for its answer: true on success, false when
   // unsuccessful, CommandException when refused or aborted.
