@@ -10,6 +10,8 @@
 #include <sstream>
 #include <thread>
 
+#include <yaml-cpp/yaml.h>
+
 #include "csp/io/yaml_field.hpp"
 #include "csp/rt/emulator.hpp"
 #include "csp/rt/hand.hpp"
@@ -340,26 +342,24 @@ TEST(VacuumPump, RefusesBadArguments) {
 
 // --- Scenario sections ------------------------------------------------------------------------
 
-// The default scenario with extra sections, written to a temporary file (its robot file named
-// by absolute path).
-std::string write_scenario(const std::string& name, const std::string& extra) {
-  std::ifstream in(csp::rt::default_scenario_path());
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string scenario = text.str();
-  const std::string robot = "robot: ../robots/panda.yaml";
-  scenario.replace(scenario.find(robot), robot.size(), "robot: " CSP_SOURCE_DIR "/configs/robots/panda.yaml");
+// The default scenario with its `hand:` and `vacuum_gripper:` sections replaced (YAML flow text,
+// empty: none), written to a temporary file with its robot file named by absolute path.
+std::string write_scenario(const std::string& name, const std::string& hand, const std::string& vacuum_gripper = "") {
+  YAML::Node scenario = YAML::LoadFile(csp::rt::default_scenario_path());
+  scenario["robot"] = CSP_SOURCE_DIR "/configs/robots/panda.yaml";
+  scenario.remove("hand");
+  scenario.remove("vacuum_gripper");
+  if (!hand.empty()) scenario["hand"] = YAML::Load(hand);
+  if (!vacuum_gripper.empty()) scenario["vacuum_gripper"] = YAML::Load(vacuum_gripper);
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "csp_gripper_tests";
   std::filesystem::create_directories(dir);
   const std::filesystem::path path = dir / name;
-  std::ofstream(path) << scenario << extra;
+  std::ofstream(path) << scenario << "\n";
   return path.string();
 }
 
-TEST(Scenario, HandAndPumpSectionsAreRead) {
-  const std::string path = write_scenario(
-      "hand.yaml", "hand:\n  object: {width: 0.03, mass: 0.2}\nvacuum_gripper:\n  part: {mass: 0.3}\n");
-  const csp::rt::Scenario s = csp::rt::load_scenario(path);
+TEST(Scenario, TheDefaultScenarioHoldsAnObjectForTheHandAndAPartForThePump) {
+  const csp::rt::Scenario s = csp::rt::load_scenario(csp::rt::default_scenario_path());
   ASSERT_TRUE(s.hand.object.has_value());
   EXPECT_DOUBLE_EQ(s.hand.object->width, 0.03);
   EXPECT_DOUBLE_EQ(s.hand.object->mass, 0.2);
@@ -367,8 +367,21 @@ TEST(Scenario, HandAndPumpSectionsAreRead) {
   EXPECT_DOUBLE_EQ(s.vacuum_gripper.part->mass, 0.3);
 }
 
+TEST(Scenario, HandAndPumpSectionsAreRead) {
+  const std::string path = write_scenario("hand.yaml", "{object: {width: 0.05, mass: 0.4, friction: 0.8}, homed: false}",
+                                          "{reaction_time: 0.2}");
+  const csp::rt::Scenario s = csp::rt::load_scenario(path);
+  ASSERT_TRUE(s.hand.object.has_value());
+  EXPECT_DOUBLE_EQ(s.hand.object->width, 0.05);
+  EXPECT_DOUBLE_EQ(s.hand.object->mass, 0.4);
+  EXPECT_DOUBLE_EQ(s.hand.object->friction, 0.8);
+  EXPECT_FALSE(s.hand.homed);
+  EXPECT_FALSE(s.vacuum_gripper.part.has_value());
+  EXPECT_DOUBLE_EQ(s.vacuum_gripper.reaction_time, 0.2);
+}
+
 TEST(Scenario, BadHandSectionNamesTheKey) {
-  const std::string path = write_scenario("bad_hand.yaml", "hand:\n  object: {width: 0.12, mass: 0.2}\n");
+  const std::string path = write_scenario("bad_hand.yaml", "{object: {width: 0.12, mass: 0.2}}");
   try {
     csp::rt::load_scenario(path);
     FAIL() << "accepted a 0.12 m object";
@@ -387,8 +400,7 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 constexpr double kLate = 0.05;
 
 TEST(FrankaGripper, GraspObjectAsLibfrankasExample) {
-  const std::string path =
-      write_scenario("grasp.yaml", "hand:\n  object: {width: 0.03, mass: 0.2}\n  reaction_time: 0.02\n");
+  const std::string path = write_scenario("grasp.yaml", "{object: {width: 0.03, mass: 0.2}, reaction_time: 0.02}");
   franka::Gripper gripper(path);
   franka::GripperState state = gripper.readOnce();
   EXPECT_DOUBLE_EQ(state.max_width, 0.08);
@@ -411,7 +423,7 @@ TEST(FrankaGripper, GraspObjectAsLibfrankasExample) {
 }
 
 TEST(FrankaGripper, WrongWidthReturnsFalseAndBadArgumentsThrow) {
-  const std::string path = write_scenario("grasp_wide.yaml", "hand:\n  object: {width: 0.05, mass: 0.2}\n  reaction_time: 0.0\n");
+  const std::string path = write_scenario("grasp_wide.yaml", "{object: {width: 0.05, mass: 0.2}, reaction_time: 0.0}");
   franka::Gripper gripper(path);
   EXPECT_FALSE(gripper.grasp(0.03, 0.1, 60));   // 0.05 m object, band 0.025..0.035 m
   try {
@@ -426,7 +438,7 @@ TEST(FrankaGripper, WrongWidthReturnsFalseAndBadArgumentsThrow) {
 }
 
 TEST(FrankaGripper, StopAbortsAMoveInAnotherThread) {
-  const std::string path = write_scenario("stop.yaml", "hand:\n  reaction_time: 0.0\n");
+  const std::string path = write_scenario("stop.yaml", "{reaction_time: 0.0}");
   franka::Gripper gripper(path);
   bool aborted = false;
   std::thread mover([&] {
@@ -452,8 +464,7 @@ TEST(FrankaGripper, AnyOtherAddressIsAnEmptyHand) {
 }
 
 TEST(FrankaVacuumGripper, VacuumObjectAsLibfrankasExample) {
-  const std::string path = write_scenario("vacuum.yaml", "vacuum_gripper:\n  part: {mass: 0.3}\n");
-  franka::VacuumGripper gripper(path);
+  franka::VacuumGripper gripper(csp::rt::default_scenario_path());
   // libfranka's vacuum_object: setpoint 100 (the pump regulates at the most it reaches), 1 s timeout.
   ASSERT_TRUE(gripper.vacuum(100, std::chrono::milliseconds(1000)));
   franka::VacuumGripperState state = gripper.readOnce();
