@@ -1,7 +1,9 @@
 // franka::Gripper: the Franka Hand of the emulated robot, behind libfranka's Gripper interface.
 // Commands block for as long as the hand takes (wall time), answer as the hand's server does
 // (true / false / CommandException) and may be called from several threads (stop() ends a move
-// or grasp running in another). The model: csp::rt::Hand, docs/gripper.md.
+// or grasp running in another). Arguments the hand refuses throw CommandException
+// "libfranka gripper: Command failed!" followed by what was wrong; a command that another one
+// replaced throws "libfranka gripper: Command aborted!". The model: csp::rt::Hand, docs/gripper.md.
 #pragma once
 
 #include <cstdint>
@@ -39,9 +41,6 @@ class Gripper {
   // Waits for the hand's next state message and returns it.
   GripperState readOnce() const;
   ServerVersion serverVersion() const noexcept;
-
-  // Throw CommandException ("libfranka gripper: Command failed!", then why) for arguments the hand
-  // refuses, and "Command aborted!" when another command took over.
 
  private:
   struct Impl;
