@@ -15,7 +15,7 @@ constexpr Gripper::ServerVersion kServerVersion = 3;
 // The class holds only its opaque pointer: its layout never depends on the user's compile flags.
 static_assert(sizeof(Gripper) == sizeof(void*), "franka::Gripper must hold nothing but its Impl pointer");
 
-struct Gripper::Impl : WallClockDevice<csp::rt::Hand> {
+struct Gripper::Impl : csp::franka_support::WallClockDevice<csp::rt::Hand> {
   using WallClockDevice::WallClockDevice;
 };
 

@@ -27,7 +27,7 @@ const char* status_name(VacuumGripperDeviceStatus status) {
 // The class holds only its opaque pointer: its layout never depends on the user's compile flags.
 static_assert(sizeof(VacuumGripper) == sizeof(void*), "franka::VacuumGripper must hold nothing but its Impl pointer");
 
-struct VacuumGripper::Impl : WallClockDevice<csp::rt::VacuumPump> {
+struct VacuumGripper::Impl : csp::franka_support::WallClockDevice<csp::rt::VacuumPump> {
   using WallClockDevice::WallClockDevice;
 };
 

@@ -15,7 +15,12 @@
 #include "csp/rt/scenario.hpp"
 #include "franka/exception.h"
 
-namespace franka {
+// Outside namespace franka: libcsp_franka.so exports libfranka's API only (package/franka.map).
+namespace csp::franka_support {
+
+using franka::CommandException;
+using franka::InvalidOperationException;
+using franka::NetworkException;
 
 // The device of the robot at address: the section of a scenario file given as address, or the
 // default device (nothing held) for any other address, e.g. an IP.
@@ -97,4 +102,4 @@ class WallClockDevice {
   std::atomic<bool> reading_{false};
 };
 
-}  // namespace franka
+}  // namespace csp::franka_support
