@@ -164,10 +164,10 @@ std::vector<std::string> enable_realtime_scheduling() {
 }
 
 MotionResult run_motion(Emulator& emulator, ControlMode mode, const Controller& controller,
-                        const LoopOptions& options) {
+                        const LoopOptions& options, std::optional<ControllerMode> controller_mode) {
   std::optional<std::string> warning;
   if (options.clock == Clock::kRealtime) warning = require_realtime(options.realtime_config);   // before the motion
-  emulator.start_motion(mode);
+  emulator.start_motion(mode, controller_mode);
   MotionRunner runner(emulator, controller, options);
   if (warning) runner.report().warnings.push_back(*warning);
   return options.clock == Clock::kLockstep ? run_lockstep(runner) : run_realtime(runner);

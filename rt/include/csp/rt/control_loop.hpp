@@ -93,12 +93,13 @@ struct MotionResult {
   TimingReport timing;
 };
 
-// Starts a motion in `mode`, calls `controller` once per received state (the period is the time
+// Starts a motion in `mode` (tracked by the robot's `controller_mode`, see Emulator::start_motion),
+// calls `controller` once per received state (the period is the time
 // since the previous call: 0 first, 1 ms, more after an overrun), and steps the emulator until the
 // controller returns motion_finished, max_duration passes, or a reflex ends the motion. A
 // controller exception aborts the motion (Reflex), is reported to the observer, and is rethrown.
 MotionResult run_motion(Emulator& emulator, ControlMode mode, const Controller& controller,
-                        const LoopOptions& options);
+                        const LoopOptions& options, std::optional<ControllerMode> controller_mode = std::nullopt);
 
 // SCHED_FIFO and mlockall for the calling thread; returns what could not be had (empty: all).
 std::vector<std::string> enable_realtime_scheduling();
