@@ -7,6 +7,8 @@
 #include <franka/exception.h>
 #include <franka/robot.h>
 
+#include "csp/franka_access.hpp"
+#include "csp/rt/scenario.hpp"
 #include "reflex_trips.hpp"
 
 namespace {
@@ -28,7 +30,7 @@ int main(int argc, char** argv) {
     for (const csp_examples::ReflexTrip& trip : csp_examples::reflex_trips()) {
       csp::rt::Scenario scenario = base;
       if (trip.prepare) trip.prepare(scenario);
-      franka::Robot robot(scenario);
+      csp::franka_access::EmulatedRobot robot(scenario);
       std::cout << csp::rt::error_name(trip.error) << ": " << trip.how << "\n  ";
       try {
         trip.run(robot);
