@@ -428,11 +428,13 @@ ErrorSet Emulator::joint_setpoint(const Command* command, Vector7& q_c, Vector7&
     q_c = g.q_c + dq_c * kDeltaT;
   } else if (*mode_ == ControlMode::kJointPosition) {
     q_c = command->values;
-    // The robot rejects the start pose itself; the jump is not also a velocity error.
+    // The robot rejects the start pose itself; the jump is not also a velocity error. A first
+    // command within the tolerance starts the trajectory at rest where it says (libfranka's
+    // examples start from the measured q, 0.9's from q_d: both a little off the held pose).
     if (g.first_command &&
         ((q_c - g.q_c).array().abs() > plant_.parameters().joint_limits.dq_max.array() * kDeltaT).any())
       errors.set(Error::joint_position_motion_generator_start_pose_invalid);
-    dq_c = (q_c - g.q_c) / kDeltaT;
+    dq_c = g.first_command ? Vector7::Zero().eval() : ((q_c - g.q_c) / kDeltaT).eval();
   } else {
     dq_c = command->values;
     q_c = g.q_c + dq_c * kDeltaT;
