@@ -271,10 +271,11 @@ void Emulator::start_motion(ControlMode mode, std::optional<ControllerMode> cont
                                              : controller.value_or(ControllerMode::kJointImpedance);
   phase_ = Phase::kMove;
   state_.robot_mode = RobotMode::kMove;
-  // A motion starts from the desired position the robot holds (q_d), at rest: its EE pose and
-  // elbow are where a Cartesian motion generator starts.
+  // A motion starts at rest where the arm is (what Idle publishes as q_d; libfranka 0.15's examples
+  // start from q, 0.9's from q_d, libfranka's filter from q_d): its EE pose and elbow are where a
+  // Cartesian motion generator starts.
   MotionGenerator& g = motion_generator_;
-  g.q_c = torque_loop_.q_hold;
+  g.q_c = plant_state_.q;
   g.dq_c.setZero();
   g.ddq_c.setZero();
   g.first_command = true;
@@ -635,7 +636,7 @@ void Emulator::publish() {
   const MotionGenerator& g = motion_generator_;
   const Estimator& e = estimator_;
   const bool motion_generator = mode_ && *mode_ != ControlMode::kTorque;
-  const Vector7 q_d = motion_generator ? g.q_c : (phase_ == Phase::kIdle ? torque_loop_.q_hold : arm.q);
+  const Vector7 q_d = motion_generator ? g.q_c : arm.q;   // no motion: the robot desires where it is
 
   assign(s.q, arm.q);
   assign(s.dq, arm.dq);

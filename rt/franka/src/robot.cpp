@@ -196,10 +196,7 @@ void run_control(Robot::Impl& impl, const Callback<Motion>* motion, const Callba
     }
   } catch (const std::exception& e) {
     // The controller failed: the robot's command intake stops the motion; the error goes on.
-    session.fail(std::string("the controller failed: ") + e.what());
-    impl.last_timing = session.result().timing;
-    impl.session.reset();
-    impl.mark_idle();
+    impl.fail_motion(std::string("the controller failed: ") + e.what());
     throw;
   }
   impl.end_motion();
@@ -272,6 +269,14 @@ void Robot::Impl::end_motion() {
     throw ControlException(message.str(), log);
   }
   if (preempted) throw ControlException("libfranka: Move command preempted!", recent_log());
+}
+
+void Robot::Impl::fail_motion(const std::string& reason) {
+  session->fail(reason);
+  last_timing = session->result().timing;
+  session.reset();
+  mode_.reset();
+  mark_idle();
 }
 
 void Robot::Impl::cancel_motion() {

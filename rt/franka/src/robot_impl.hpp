@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "csp/rt/control_loop.hpp"
@@ -37,6 +38,9 @@ class Robot::Impl {
   // Ends the session of a motion that is over: nothing after a finished motion; ControlException
   // after a reflex ("motion aborted by reflex!" with the errors) or a stop ("Move command preempted!").
   void end_motion();
+  // The program failed on the state read last (a callback threw, or sent NaN): the robot's command
+  // intake ends the motion in a reflex with `reason`.
+  void fail_motion(const std::string& reason);
   // The session ends with the robot holding its last command (Robot::stop, a handle destroyed
   // before its motion finished).
   void cancel_motion();
