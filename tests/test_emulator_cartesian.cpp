@@ -57,9 +57,9 @@ Command twist_command(const Vector6& twist) {
 }
 
 // The only flag of `errors`: each purpose-built command must trip its error and nothing else.
-void expect_only(const rt::Errors& errors, Error error) {
+void expect_only(const rt::ErrorSet& errors, Error error) {
   EXPECT_TRUE(errors.has(error)) << rt::error_name(error) << " expected, got " << std::string(errors);
-  rt::Errors only;
+  rt::ErrorSet only;
   only.set(error);
   EXPECT_EQ(errors, only) << std::string(errors);
 }
@@ -356,7 +356,7 @@ TEST(EmulatorCartesian, TorqueControlWithAMotionGenerator) {
 // Errors: each one tripped by a purpose-built command, and nothing else
 
 // Runs `command_at(k)` from the start until the motion ends; returns the errors that ended it.
-rt::Errors run_until_reflex(Emulator& emulator, ControlMode mode, const std::function<Command(int)>& command_at,
+rt::ErrorSet run_until_reflex(Emulator& emulator, ControlMode mode, const std::function<Command(int)>& command_at,
                             int max_cycles = 3000, ControllerMode controller = ControllerMode::kJointImpedance) {
   emulator.start_motion(mode, controller);
   for (int k = 0; k < max_cycles && emulator.in_motion(); ++k) {
@@ -364,7 +364,7 @@ rt::Errors run_until_reflex(Emulator& emulator, ControlMode mode, const std::fun
     emulator.step(&command);
   }
   EXPECT_EQ(emulator.state().robot_mode, rt::RobotMode::kReflex) << "no reflex";
-  return emulator.state().last_motion_errors;
+  return rt::ErrorSet(emulator.state().last_motion_errors);
 }
 
 // A translational velocity command with jerk-limited start: jerk j until acceleration a, then
@@ -409,7 +409,7 @@ TEST(EmulatorCartesianErrors, VelocityAccelerationAndJerkPerAxis) {
     Emulator emulator(slow_cartesian_limits());
     const double q3 = emulator.state().q[2], sign = emulator.state().elbow[1];
     double elbow = q3;
-    const rt::Errors errors = run_until_reflex(emulator, ControlMode::kCartesianVelocity, [&](int k) {
+    const rt::ErrorSet errors = run_until_reflex(emulator, ControlMode::kCartesianVelocity, [&](int k) {
       if (c.axis >= 0) return ramp(k, c.jerk, c.cap, c.axis);
       Command command;   // the elbow's position integrates the same ramp's velocity, from the start
       if (k > 0) elbow += ramp(k - 1, c.jerk, c.cap, 0).O_dP_EE_c[0] * kDt;
@@ -425,13 +425,13 @@ TEST(EmulatorCartesianErrors, StartPoseAndFrame) {
     Emulator emulator(panda());
     Transform away = pose_of(emulator.state().O_T_EE_c);
     away.translation.x() += 0.01;   // 1 cm: more than one cycle at 1.7 m/s
-    const rt::Errors e = run_until_reflex(emulator, ControlMode::kCartesianPose, [&](int) { return pose_command(away); });
+    const rt::ErrorSet e = run_until_reflex(emulator, ControlMode::kCartesianPose, [&](int) { return pose_command(away); });
     expect_only(e, Error::cartesian_position_motion_generator_start_pose_invalid);
   }
   {
     Emulator emulator(panda());
     const Transform initial = pose_of(emulator.state().O_T_EE_c);
-    const rt::Errors e = run_until_reflex(emulator, ControlMode::kCartesianPose, [&](int k) {
+    const rt::ErrorSet e = run_until_reflex(emulator, ControlMode::kCartesianPose, [&](int k) {
       Command command = pose_command(initial);
       if (k == 5) command.O_T_EE_c[0] *= 1.001;   // not a rotation
       return command;
@@ -476,7 +476,7 @@ TEST(EmulatorCartesianErrors, Elbow) {
     Emulator emulator(panda(q));
     const Transform pose = pose_of(emulator.state().O_T_EE_c);
     const double sign = emulator.state().elbow[1];
-    const rt::Errors e = run_until_reflex(emulator, ControlMode::kCartesianPose, [&](int k) {
+    const rt::ErrorSet e = run_until_reflex(emulator, ControlMode::kCartesianPose, [&](int k) {
       const double t = k * kDt;
       return elbow_command(pose, q[2] + 0.5 * 9.0 * t * t, sign);
     });

@@ -98,11 +98,11 @@ InverseKinematics inverse_kinematics(const Model& model, Data& data, const Trans
 // limits, velocity -> _velocity_limits_violation, acceleration -> _velocity_discontinuity, jerk
 // -> _acceleration_discontinuity, like the joint checks. Then the inverse kinematics from the
 // last commanded joints gives q_c; the caller checks it like a joint command.
-Errors Emulator::cartesian_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c) {
+ErrorSet Emulator::cartesian_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c) {
   const CartesianLimits& limits = plant_.parameters().cartesian_limits;
   const JointLimits& joint_limits = plant_.parameters().joint_limits;
   MotionGenerator& g = motion_generator_;
-  Errors errors;
+  ErrorSet errors;
 
   Transform pose;
   Vector6 twist;

@@ -231,10 +231,10 @@ class Emulator {
   void publish();
 
   // Parts of the stages.
-  Errors accept_torque(const Vector7* torque);   // null: the command was lost
-  Errors run_motion_generator(const Command* command);
-  Errors joint_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c);
-  Errors cartesian_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c);
+  ErrorSet accept_torque(const Vector7* torque);   // null: the command was lost
+  ErrorSet run_motion_generator(const Command* command);
+  ErrorSet joint_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c);
+  ErrorSet cartesian_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c);
   // The robot's Cartesian impedance controller, in cartesian_motion.cpp: the desired stiffness
   // frame K at the commanded joints and its critical damping, once per cycle; its torque at the
   // arm's state, every substep.
@@ -248,7 +248,7 @@ class Emulator {
                                      const Vector7& joint_damping);
   void gravity_compensation_torque();
   LinkWrenches external_link_wrenches(double t);
-  void enter_reflex(const Errors& errors, const std::string& reason);
+  void enter_reflex(const ErrorSet& errors, const std::string& reason);
 
   void rebuild_internal_model();
   void require_no_motion(const char* operation) const;
