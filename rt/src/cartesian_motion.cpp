@@ -16,7 +16,7 @@ constexpr double kLimitTolerance = 1e-9;       // round-off allowance on every l
 constexpr double kOrthonormalThreshold = 1e-5; // libfranka control_tools.h isHomogeneousTransformation
 constexpr double kNewtonDamping = 1e-6;        // lambda of the damped Newton step [m or rad]
 constexpr int kMaxNewtonIterations = 20;
-constexpr double kProjectionDamping = 1e-2;    // (J J^T + lambda^2 1)^-1 in the null-space projector
+constexpr double kProjectionDamping = 1e-3;    // (J J^T + lambda^2 1)^-1 in the null-space projector
 constexpr double kInertiaDamping = 1e-6;       // regularises J M^-1 J^T near singularities
 
 // The EE pose error of the robot's model at q: (p_d - p; log(R_d R^T)), base frame.

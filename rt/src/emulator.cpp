@@ -666,7 +666,7 @@ void Emulator::publish() {
   assign(s.F_T_NE, F_T_NE_);
   assign(s.NE_T_EE, NE_T_EE_);
   assign(s.EE_T_K, p.EE_T_K);
-  if (motion_generator) forward_kinematics(internal_, internal_data_, q_d);
+  forward_kinematics(internal_, internal_data_, q_d);   // the desired pose, also the one Idle holds
   assign(s.O_T_EE_d, internal_data_.O_T_EE);
   assign(s.O_ddP_O, Vector3(-p.gravity));
 
