@@ -23,8 +23,8 @@ int main(int argc, char** argv) {
     return -1;
   }
 
-  uint64_t samples = 0;       // loop cycles after the first
-  uint64_t robot_time = 0;    // [ms] of robot time since the first cycle
+  uint64_t samples = 0;     // loop cycles after the first
+  uint64_t robot_time = 0;  // [ms] of robot time since the first cycle
   double success_sum = 0.0;
   double success_min = 1.0;
   double success_max = 0.0;
@@ -70,15 +70,14 @@ int main(int argc, char** argv) {
   }
 
   const double success_mean = samples > 0 ? success_sum / static_cast<double>(samples) : 0.0;
-  std::cout << std::endl
-            << "#######################################################" << std::endl;
+  std::cout << std::endl << "#######################################################" << std::endl;
   // One robot state per millisecond: each millisecond without a loop cycle is a lost state.
   const uint64_t lost_states = robot_time - samples;
   if (lost_states > 0) {
     std::cout << "The control loop did not get executed " << lost_states << " times in the"
               << std::endl
-              << "last " << robot_time << " milliseconds! (lost " << lost_states
-              << " robot states)" << std::endl
+              << "last " << robot_time << " milliseconds! (lost " << lost_states << " robot states)"
+              << std::endl
               << std::endl;
   }
   std::cout << "Control command success rate of " << samples << " samples: " << std::endl

@@ -189,8 +189,8 @@ franka::CartesianVelocities CartesianVelocityWave::operator()(
   const double speed =
       direction * kSpeedMax / 2.0 * (1.0 - std::cos(2.0 * M_PI / kLegTime * time_));
 
-  const std::array<double, 6> twist{{std::cos(kAngle) * speed, 0.0, -std::sin(kAngle) * speed,
-                                     0.0, 0.0, 0.0}};
+  const std::array<double, 6> twist{
+      {std::cos(kAngle) * speed, 0.0, -std::sin(kAngle) * speed, 0.0, 0.0, 0.0}};
   franka::CartesianVelocities output(twist);
   if (time_ >= 2.0 * kLegTime) {
     std::cout << std::endl << "Finished motion, shutting down example" << std::endl;
@@ -254,8 +254,7 @@ void writeLogToFile(const std::vector<franka::Record>& log) {
     return;
   }
   try {
-    const std::filesystem::path folder =
-        std::filesystem::temp_directory_path() / "libfranka-logs";
+    const std::filesystem::path folder = std::filesystem::temp_directory_path() / "libfranka-logs";
     std::filesystem::create_directories(folder);
     const auto now = std::chrono::duration_cast<std::chrono::milliseconds>(
         std::chrono::system_clock::now().time_since_epoch());

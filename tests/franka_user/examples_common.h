@@ -41,8 +41,7 @@ class MotionGenerator {
   // speed_factor in (0, 1]; throws std::invalid_argument otherwise.
   MotionGenerator(double speed_factor, const std::array<double, 7> q_goal);
 
-  franka::JointPositions operator()(const franka::RobotState& robot_state,
-                                    franka::Duration period);
+  franka::JointPositions operator()(const franka::RobotState& robot_state, franka::Duration period);
 
  private:
   using Vector7d = Eigen::Matrix<double, 7, 1>;
@@ -63,8 +62,7 @@ class MotionGenerator {
 class JointPositionWave {
  public:
   explicit JointPositionWave(std::array<double, 7> franka::RobotState::*start_field);
-  franka::JointPositions operator()(const franka::RobotState& robot_state,
-                                    franka::Duration period);
+  franka::JointPositions operator()(const franka::RobotState& robot_state, franka::Duration period);
 
  private:
   std::array<double, 7> franka::RobotState::*start_field_;
@@ -93,8 +91,7 @@ class JointVelocityWave {
 class CartesianArc {
  public:
   explicit CartesianArc(std::array<double, 16> franka::RobotState::*start_field);
-  franka::CartesianPose operator()(const franka::RobotState& robot_state,
-                                   franka::Duration period);
+  franka::CartesianPose operator()(const franka::RobotState& robot_state, franka::Duration period);
 
  private:
   std::array<double, 16> franka::RobotState::*start_field_;

@@ -24,12 +24,12 @@ int main(int argc, char** argv) {
     return -1;
   }
 
-  constexpr double kTargetMass = 1.0;     // [kg]
-  constexpr double kGravity = 9.81;       // [m/s^2]
-  constexpr double kP = 1.0;              // proportional gain on the torque error
-  constexpr double kI = 2.0;              // integral gain [1/s]
-  constexpr double kFilterGain = 0.001;   // per cycle: the mass ramps in over about a second
-  constexpr double kMaxDistance = 0.01;   // [m] from the start before the program gives up
+  constexpr double kTargetMass = 1.0;    // [kg]
+  constexpr double kGravity = 9.81;      // [m/s^2]
+  constexpr double kP = 1.0;             // proportional gain on the torque error
+  constexpr double kI = 2.0;             // integral gain [1/s]
+  constexpr double kFilterGain = 0.001;  // per cycle: the mass ramps in over about a second
+  constexpr double kMaxDistance = 0.01;  // [m] from the start before the program gives up
 
   using Vector7d = Eigen::Matrix<double, 7, 1>;
 

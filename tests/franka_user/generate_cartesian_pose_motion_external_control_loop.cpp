@@ -1,5 +1,6 @@
-// The Cartesian pose motion of generate_cartesian_pose_motion (from the commanded O_T_EE_c) with the external control loop of libfranka 0.15: the program itself reads each state with
-// readOnce and writes each command with writeOnce, instead of handing Robot::control a callback.
+// The Cartesian pose motion of generate_cartesian_pose_motion (from the commanded O_T_EE_c) with
+// the external control loop of libfranka 0.15: the program itself reads each state with readOnce
+// and writes each command with writeOnce, instead of handing Robot::control a callback.
 //
 // Warning: the robot moves; make sure there is enough space in front of it.
 #include <iostream>
@@ -10,6 +11,7 @@
 #include <franka/robot.h>
 
 #include "examples_common.h"
+#include "external_control_loop.h"
 
 int main(int argc, char** argv) {
   if (argc != 2) {
@@ -23,16 +25,9 @@ int main(int argc, char** argv) {
     moveToStartPose(robot);
 
     setMotionCollisionBehavior(robot);
-    auto motion = CartesianArc(&franka::RobotState::O_T_EE_c);
-    auto active_control =
-        robot.startCartesianPoseControl(research_interface::robot::Move::ControllerMode::kJointImpedance);
-    bool motion_finished = false;
-    while (!motion_finished) {
-      const auto [robot_state, period] = active_control->readOnce();
-      const auto command = motion(robot_state, period);
-      motion_finished = command.motion_finished;
-      active_control->writeOnce(command);
-    }
+    auto active_control = robot.startCartesianPoseControl(
+        research_interface::robot::Move::ControllerMode::kJointImpedance);
+    runExternalControlLoop(*active_control, CartesianArc(&franka::RobotState::O_T_EE_c));
   } catch (const franka::Exception& e) {
     std::cout << e.what() << std::endl;
     return -1;

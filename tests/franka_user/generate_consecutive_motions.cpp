@@ -29,7 +29,8 @@ int main(int argc, char** argv) {
     for (int motion = 0; motion < 5; ++motion) {
       std::cout << "Executing motion." << std::endl;
       try {
-        robot.control(JointVelocityWave(0.2, 4.0, {{false, false, true, false, false, false, false}}));
+        robot.control(
+            JointVelocityWave(0.2, 4.0, {{false, false, true, false, false, false, false}}));
       } catch (const franka::ControlException& e) {
         std::cout << e.what() << std::endl;
         std::cout << "Running error recovery..." << std::endl;

@@ -42,10 +42,11 @@ int main(int argc, char** argv) {
           std::array<double, 7> dq_command{};
           dq_command[kJoint] = time < 1.0 ? kStepVelocity : 0.0;
           if (!raw) {
-            // From the last desired velocity and acceleration (dq_d, ddq_d), as 0.9 does inside control.
-            dq_command = franka::limitRate(franka::kMaxJointVelocity, franka::kMaxJointAcceleration,
-                                           franka::kMaxJointJerk, dq_command, state.dq_d,
-                                           state.ddq_d);
+            // From the last desired velocity and acceleration (dq_d, ddq_d), as 0.9 does inside
+            // control.
+            dq_command =
+                franka::limitRate(franka::kMaxJointVelocity, franka::kMaxJointAcceleration,
+                                  franka::kMaxJointJerk, dq_command, state.dq_d, state.ddq_d);
           }
 
           franka::JointVelocities output(dq_command);

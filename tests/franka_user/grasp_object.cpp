@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
       return -1;
     }
 
-    constexpr double kSpeed = 0.1;  // [m/s]
+    constexpr double kSpeed = 0.1;   // [m/s]
     constexpr double kForce = 60.0;  // [N]
     if (!gripper.grasp(object_width, kSpeed, kForce)) {
       std::cout << "Failed to grasp object." << std::endl;

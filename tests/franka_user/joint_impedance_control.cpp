@@ -66,11 +66,11 @@ int main(int argc, char** argv) {
     return -1;
   }
 
-  constexpr double kRadius = 0.05;            // [m]
-  constexpr double kSpeedMax = 0.25;          // along the circle [m/s]
-  constexpr double kAccelerationTime = 2.0;   // to reach kSpeedMax and to stop again [s]
-  constexpr double kRunTime = 20.0;           // [s]
-  constexpr double kPrintRate = 10.0;         // [Hz]
+  constexpr double kRadius = 0.05;           // [m]
+  constexpr double kSpeedMax = 0.25;         // along the circle [m/s]
+  constexpr double kAccelerationTime = 2.0;  // to reach kSpeedMax and to stop again [s]
+  constexpr double kRunTime = 20.0;          // [s]
+  constexpr double kPrintRate = 10.0;        // [Hz]
 
   PrintData print_data;
   std::atomic_bool running{true};
@@ -131,8 +131,8 @@ int main(int argc, char** argv) {
       const std::array<double, 7> coriolis = model.coriolis(state);
       std::array<double, 7> tau_d{};
       for (size_t i = 0; i < 7; ++i) {
-        tau_d[i] = stiffness[i] * (state.q_d[i] - state.q[i]) - damping[i] * state.dq[i] +
-                   coriolis[i];
+        tau_d[i] =
+            stiffness[i] * (state.q_d[i] - state.q[i]) - damping[i] * state.dq[i] + coriolis[i];
       }
       // Robot::control rate-limits the torque anyway (limit_rate defaults to true); limiting it
       // here as well lets the print thread show what the robot is really sent.

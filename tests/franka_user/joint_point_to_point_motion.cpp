@@ -31,8 +31,8 @@ int main(int argc, char** argv) {
   for (int i = 0; arguments_valid && i < 7; ++i) {
     arguments_valid = parseNumber(argv[i + 2], &q_goal[static_cast<size_t>(i)]);
   }
-  arguments_valid = arguments_valid && parseNumber(argv[9], &speed_factor) &&
-                    speed_factor > 0.0 && speed_factor <= 1.0;
+  arguments_valid = arguments_valid && parseNumber(argv[9], &speed_factor) && speed_factor > 0.0 &&
+                    speed_factor <= 1.0;
   if (!arguments_valid) {
     std::cerr << "Usage: " << argv[0] << " <robot-hostname> "
               << "<joint0> <joint1> <joint2> <joint3> <joint4> <joint5> <joint6> "
