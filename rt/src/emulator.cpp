@@ -171,6 +171,11 @@ void Emulator::set_load(const RigidBodyInertia& load) {
   publish();
 }
 
+void Emulator::set_carried_object(const RigidBodyInertia& object) {
+  require(load_problem(object), "carried object");
+  plant_ = with_load(plant_, combine(settings_.plant.load, object));
+}
+
 void Emulator::set_EE(const Transform& NE_T_EE) {
   require_no_motion("setEE");
   require(transform_problem(NE_T_EE), "setEE");

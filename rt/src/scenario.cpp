@@ -168,7 +168,8 @@ Scenario load_scenario(const std::string& path) {
   const YAML::Node root = load_yaml_file(path, "scenario file");
   const Field top(root, path, "");
   top.allow_only({"name", "robot", "end_effector", "joint_limits", "plant", "robot_model", "initial_q", "duration",
-                  "clock", "seed", "robot_settings", "controller", "faults", "external_wrenches"});
+                  "clock", "seed", "robot_settings", "controller", "faults", "external_wrenches",
+                  "hand", "vacuum_gripper"});
   Scenario s;
   s.path = path;
   s.name = top["name"].text();
@@ -232,6 +233,8 @@ Scenario load_scenario(const std::string& path) {
     const Field wrenches = top["external_wrenches"];
     for (std::size_t i = 0; i < wrenches.sequence_size(); ++i) s.emulator.external_wrenches.push_back(read_wrench(wrenches[i]));
   }
+  if (top.has("hand")) s.hand = read_hand_settings(top["hand"]);
+  if (top.has("vacuum_gripper")) s.vacuum_gripper = read_vacuum_settings(top["vacuum_gripper"]);
   s.emulator.seed = s.seed;
   s.command_faults.seed = s.seed + 1;   // a stream of its own: noise settings do not shift command losses
   return s;

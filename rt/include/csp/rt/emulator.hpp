@@ -130,6 +130,10 @@ class Emulator {
   // What the robot is told it carries (flange frame): its model only; what the arm really
   // carries is the plant's load, set by the scenario.
   void set_load(const RigidBodyInertia& load);
+  // What the arm really carries beyond the scenario's load, e.g. the object in the hand's grasp
+  // (flange frame): changes the plant only (the robot's model learns of it only through setLoad,
+  // as on a real robot). Allowed between any two cycles, also during a motion.
+  void set_carried_object(const RigidBodyInertia& object);
   void set_EE(const Transform& NE_T_EE);
   void set_K(const Transform& EE_T_K);
   // Clears current_errors and releases the brakes (Reflex -> Idle).

@@ -10,6 +10,7 @@
 
 #include "csp/rt/control_loop.hpp"
 #include "csp/rt/emulator.hpp"
+#include "csp/rt/hand.hpp"
 
 namespace csp::rt {
 
@@ -59,6 +60,8 @@ struct Scenario {
   double duration = 10.0;   // [s], at most kMaxDuration
   Clock clock = Clock::kLockstep;
   uint64_t seed = 1;
+  HandSettings hand;                   // the Franka Hand (franka::Gripper) and what it may grasp
+  VacuumSettings vacuum_gripper;       // the Cobot Pump (franka::VacuumGripper)
 };
 
 Scenario load_scenario(const std::string& path);
