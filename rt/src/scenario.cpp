@@ -234,7 +234,10 @@ Scenario load_scenario(const std::string& path) {
     for (std::size_t i = 0; i < wrenches.sequence_size(); ++i) s.emulator.external_wrenches.push_back(read_wrench(wrenches[i]));
   }
   if (top.has("hand")) s.hand = read_hand_settings(top["hand"]);
-  if (top.has("vacuum_gripper")) s.vacuum_gripper = read_vacuum_settings(top["vacuum_gripper"]);
+  if (top.has("vacuum_gripper")) {
+    s.vacuum_gripper = read_vacuum_settings(top["vacuum_gripper"]);
+    s.has_vacuum_gripper = true;
+  }
   s.emulator.seed = s.seed;
   s.command_faults.seed = s.seed + 1;   // a stream of its own: noise settings do not shift command losses
   return s;

@@ -32,7 +32,8 @@ struct VacuumGripper::Impl : csp::franka_support::WallClockDevice<csp::rt::Vacuu
 };
 
 VacuumGripper::VacuumGripper(const std::string& franka_address)
-    : impl_(std::make_unique<Impl>(franka_address, &csp::rt::Scenario::vacuum_gripper, "libfranka vacuum gripper")) {}
+    : impl_(std::make_unique<Impl>(franka_address, &csp::rt::Scenario::vacuum_gripper, "libfranka vacuum gripper",
+                                     &csp::rt::Scenario::has_vacuum_gripper)) {}
 VacuumGripper::VacuumGripper(VacuumGripper&&) noexcept = default;
 VacuumGripper& VacuumGripper::operator=(VacuumGripper&&) noexcept = default;
 VacuumGripper::~VacuumGripper() noexcept = default;

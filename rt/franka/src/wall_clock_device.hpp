@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <mutex>
 #include <string>
@@ -13,6 +14,7 @@
 
 #include "csp/rt/hand.hpp"
 #include "csp/rt/scenario.hpp"
+#include "robot_address.hpp"
 #include "franka/exception.h"
 
 // Outside namespace franka: libcsp_franka.so exports libfranka's API only (package/franka.map).
@@ -22,16 +24,24 @@ using franka::CommandException;
 using franka::InvalidOperationException;
 using franka::NetworkException;
 
-// The device of the robot at address: the section of a scenario file given as address, or the
-// default device (nothing held) for any other address, e.g. an IP.
+// The device of the robot at address, found as franka::Robot finds its robot (a scenario path, or an
+// IP/hostname with $CSP_SCENARIO or the shipped libfranka_panda scenario): that scenario's section.
+// A device the scenario does not mount (`mounted` false) cannot be connected to, as on a robot
+// without it.
 template <typename Settings>
-Settings device_at(const std::string& address, Settings csp::rt::Scenario::*section, const std::string& who) {
-  if (!std::filesystem::is_regular_file(address)) return {};
+Settings device_at(const std::string& address, Settings csp::rt::Scenario::*section, const std::string& who,
+                   bool csp::rt::Scenario::*mounted = nullptr) {
+  csp::rt::Scenario scenario;
   try {
-    return csp::rt::load_scenario(address).*section;
+    scenario = csp::rt::load_scenario(csp::franka_address::scenario_for_address(
+        address, std::getenv("CSP_SCENARIO"), csp::rt::shipped_config_dir() + "/scenarios"));
   } catch (const std::exception& e) {
-    throw NetworkException(who + ": cannot reach the device of " + address + ": " + e.what());
+    throw NetworkException("libfranka: Connection to " + address + " failed: " + who + ": " + e.what());
   }
+  if (mounted != nullptr && !(scenario.*mounted))
+    throw NetworkException("libfranka: Connection to " + address + " failed: " + who +
+                           ": the robot has no such device (its scenario has no section for it)");
+  return scenario.*section;
 }
 
 template <typename Device>
@@ -40,8 +50,9 @@ class WallClockDevice {
   // The device of the robot at address (device_at); who: libfranka's message prefix, e.g.
   // "libfranka gripper".
   template <typename Settings>
-  WallClockDevice(const std::string& address, Settings csp::rt::Scenario::*section, std::string who)
-      : device_(device_at(address, section, who)), who_(std::move(who)), last_(std::chrono::steady_clock::now()) {}
+  WallClockDevice(const std::string& address, Settings csp::rt::Scenario::*section, std::string who,
+                  bool csp::rt::Scenario::*mounted = nullptr)
+      : device_(device_at(address, section, who, mounted)), who_(std::move(who)), last_(std::chrono::steady_clock::now()) {}
 
   // Issues a command with issue(device) and waits for its answer: true on success, false when
   // unsuccessful, CommandException when refused or aborted.

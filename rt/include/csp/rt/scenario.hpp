@@ -62,6 +62,7 @@ struct Scenario {
   uint64_t seed = 1;
   HandSettings hand;                   // the Franka Hand (franka::Gripper) and what it may grasp
   VacuumSettings vacuum_gripper;       // the Cobot Pump (franka::VacuumGripper)
+  bool has_vacuum_gripper = false;     // the scenario mounts a Cobot Pump (a `vacuum_gripper:` section)
 };
 
 Scenario load_scenario(const std::string& path);
