@@ -13,6 +13,10 @@ struct FrictionModel {
   Vector7 phi1 = Vector7::Zero(), phi2 = Vector7::Zero(), phi3 = Vector7::Zero();
   // kLinear: viscous [N m s/rad] * dq + coulomb [N m] * sign(dq) + offset [N m]
   Vector7 viscous = Vector7::Zero(), coulomb = Vector7::Zero(), offset = Vector7::Zero();
+  // Static friction on top of either law [N m]: at rest a joint holds any net torque up to
+  // `breakaway`; sliding, the excess decays with the Stribeck velocity [rad/s] (stribeck_excess).
+  Vector7 breakaway = Vector7::Zero();
+  Vector7 stribeck_velocity = Vector7::Constant(0.01);
 };
 
 // The Gaz et al. (2019) law of one joint, zero at rest (docs/seed-errata.md):
