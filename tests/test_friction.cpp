@@ -2,10 +2,12 @@
 // the friction law (checked case by case, not by the solver's own residual) and never adds energy;
 // a joint holds below its breakaway torque without creeping and starts to move at it; a slowly
 // loaded spring drives a joint in stick-slip (the sawtooth); libfranka's cartesian_impedance_control
-// law no longer drifts in its null space (tests/nullspace_drift.hpp, docs/emulator.md).
+// law no longer drifts in its null space (tests/nullspace_drift.hpp, docs/emulator.md). And the
+// second failure of issue 11 (generate_consecutive_motions on the FR3 scenario), traced to its cause.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "csp/rt/scenario.hpp"
@@ -186,6 +188,53 @@ TEST(StaticFriction, CartesianImpedanceNullSpaceHoldsFor60s) {
   settings.plant.friction.breakaway.setZero();
   const DriftRun drifting = run_cartesian_impedance(settings, 60.0, 1.0);
   EXPECT_GT(std::abs(drifting.samples.back().self_motion), 0.5) << "without static friction the null space drifts";
+}
+
+// The second failure of issue 11: libfranka's generate_consecutive_motions (0.15.0) on the FR3
+// scenario. Its law (joint 3 at up to 0.2 rad/s, a 4 s cosine there and back, joint velocity mode)
+// with its collision thresholds (force 10 N / 12.5 N m on K), run as on the robot. The scenario's
+// scripted 20 N push on the hand (1.0-1.4 s) alone trips cartesian_reflex: without it the motion
+// runs to its end with the largest estimated force far below the threshold.
+struct ConsecutiveMotion {
+  std::string reflex;
+  double end_time = 0.0, largest_force = 0.0;   // [s], max |K_F_ext_hat_K| force part [N]
+};
+ConsecutiveMotion run_consecutive_motion(const rt::EmulatorSettings& settings) {
+  rt::EmulatorSettings s = settings;
+  s.collision.lower_torque_acceleration = s.collision.upper_torque_acceleration = s.collision.lower_torque_nominal =
+      s.collision.upper_torque_nominal = (Vector7() << 10.0, 10.0, 9.0, 9.0, 8.0, 7.0, 6.0).finished();
+  s.collision.lower_force_acceleration = s.collision.upper_force_acceleration = s.collision.lower_force_nominal =
+      s.collision.upper_force_nominal = (Vector6() << 10.0, 10.0, 10.0, 12.5, 12.5, 12.5).finished();
+  Emulator emulator(s);
+  emulator.start_motion(ControlMode::kJointVelocity);
+  const double time_max = 4.0, omega_max = 0.2;
+  ConsecutiveMotion run;
+  Command command;
+  for (int k = 0; emulator.in_motion(); ++k) {
+    const double time = k * rt::kDeltaT;   // libfranka's first call has period 0
+    const double cycle = std::floor(std::pow(-1.0, (time - std::fmod(time, time_max)) / time_max));
+    command.values[2] = cycle * omega_max / 2.0 * (1.0 - std::cos(2.0 * M_PI / time_max * time));
+    command.motion_finished = time >= 2.0 * time_max;
+    emulator.step(&command);
+    run.largest_force = std::max(run.largest_force, Vector3(emulator.state().K_F_ext_hat_K.data()).norm());
+    run.end_time = emulator.state().time.toSec();
+  }
+  run.reflex = emulator.reflex_reason();
+  return run;
+}
+
+TEST(LibfrankaExamples, ConsecutiveMotionsMeetOnlyTheFr3ScenariosPush) {
+  rt::EmulatorSettings settings = rt::load_scenario(std::string(CSP_SOURCE_DIR) + "/configs/scenarios/fr3_float.yaml").emulator;
+  const ConsecutiveMotion pushed = run_consecutive_motion(settings);
+  EXPECT_EQ(pushed.reflex, "[cartesian_reflex]");
+  EXPECT_GT(pushed.end_time, 1.0);   // during the push
+  EXPECT_LT(pushed.end_time, 1.4);
+
+  settings.external_wrenches.clear();
+  const ConsecutiveMotion quiet = run_consecutive_motion(settings);
+  EXPECT_EQ(quiet.reflex, "");
+  EXPECT_NEAR(quiet.end_time, 8.001, 1e-9);
+  EXPECT_LT(quiet.largest_force, 2.0) << "the motion itself stays far below the 10 N threshold";
 }
 
 }  // namespace
