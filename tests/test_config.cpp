@@ -721,7 +721,9 @@ TEST(ConfigValidation, StaticFrictionValues) {
   expect_rejected({{"stribeck_velocity: [0.05", "stribeck_speed: [0.05"}}, {block + "stribeck_speed: expected no such key"},
                   "misspelt_stribeck_velocity.yaml");
   // What loads is what the file says.
-  const Vector7 breakaway = model_parameters(load_robot_config(robot_file("panda")), {.friction = "gaz2019"}).friction.breakaway;
+  ModelOptions options;
+  options.friction = "gaz2019";
+  const Vector7 breakaway = model_parameters(load_robot_config(robot_file("panda")), options).friction.breakaway;
   EXPECT_EQ(breakaway, (Vector7() << 0.245, 0.1523, 0.1827, 0.3591, 0.2669, 0.1658, 0.2109).finished());
 }
 

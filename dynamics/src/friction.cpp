@@ -24,8 +24,10 @@ Case case_of(const Vector7& v, const Vector7& bound) {
 
 // The exact solution of one case: sticking joints at v_i = 0, sliding ones with p_i = bound_i
 // sgn(v_i), i.e. M_FF v_F = (M v_free)_F - bound_F sgn(v_F). True if it is the solution: the
-// sliders keep their direction and every sticking joint needs at most its bound.
-bool solve_case(const Matrix7& M, const Vector7& M_v_free, const Vector7& bound, const Case& c, Vector7& v) {
+// sliders keep their direction and every sticking joint needs at most its bound. Otherwise the
+// case is updated (primal-dual active set): a sticking joint that needs more starts to slide, a
+// slider that would reverse sticks.
+bool solve_case(const Matrix7& M, const Vector7& M_v_free, const Vector7& bound, Case& c, Vector7& v) {
   Matrix7 A = M;
   Vector7 rhs = M_v_free;
   for (int i = 0; i < kNumJoints; ++i) {
@@ -38,17 +40,19 @@ bool solve_case(const Matrix7& M, const Vector7& M_v_free, const Vector7& bound,
       rhs[i] -= bound[i] * c[i];
     }
   }
-  const Eigen::LLT<Matrix7> llt(A);
-  if (llt.info() != Eigen::Success) return false;
-  v = llt.solve(rhs);
+  v = Eigen::LLT<Matrix7>(A).solve(rhs);
   const Vector7 impulse = M_v_free - M * v;
+  bool solution = true;
   for (int i = 0; i < kNumJoints; ++i) {
-    if (c[i] == 0 && std::abs(impulse[i]) > bound[i] * (1.0 + 1e-9)) return false;
-    if (c[i] == 1 || c[i] == -1) {
-      if (v[i] * c[i] <= 0.0) return false;
+    if (c[i] == 0 && std::abs(impulse[i]) > bound[i] * (1.0 + 1e-9)) {
+      c[i] = impulse[i] > 0.0 ? 1 : -1;
+      solution = false;
+    } else if ((c[i] == 1 || c[i] == -1) && v[i] * c[i] <= 0.0) {
+      c[i] = 0;
+      solution = false;
     }
   }
-  return true;
+  return solution;
 }
 
 }  // namespace
@@ -71,8 +75,9 @@ double stribeck_level(double breakaway, double stribeck_velocity, double dq) {
 }
 
 // Coordinate descent on the strictly convex problem (each joint's exact minimiser with the others
-// fixed, a Gauss-Seidel sweep) finds which joints stick and which way the others slide; that case
-// is then solved exactly, so a sticking joint's velocity is exactly zero.
+// fixed, a Gauss-Seidel sweep) finds which joints stick and which way the others slide; from that
+// case a few active-set updates reach the exact solution, where a sticking joint's velocity is
+// exactly zero.
 Vector7 static_friction_velocity(const Matrix7& M, const Vector7& v_free, const Vector7& bound) {
   if (!(bound.array() > 0.0).any()) return v_free;
   const Vector7 M_v_free = M * v_free;
@@ -84,7 +89,11 @@ Vector7 static_friction_velocity(const Matrix7& M, const Vector7& v_free, const 
       v[i] = shrink(r, bound[i]) / M(i, i);
     }
     const Case current = case_of(v, bound);
-    if (current == previous && solve_case(M, M_v_free, bound, current, exact)) return exact;
+    if (current == previous) {
+      Case guess = current;
+      for (int update = 0; update < kNumJoints; ++update)
+        if (solve_case(M, M_v_free, bound, guess, exact)) return exact;
+    }
     previous = current;
   }
   return v;   // the sweeps' approximation: sticking joints are still exactly at rest
