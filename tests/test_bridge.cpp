@@ -37,7 +37,7 @@ void expect_round_trip(const T& message) {
 
 TEST(BridgeMessages, EveryTypeRoundTrips) {
   const rt::RobotState s = busy_state();
-  ASSERT_TRUE(s.last_motion_errors.communication_constraints_violation());
+  ASSERT_TRUE(s.last_motion_errors.communication_constraints_violation);
   const robot_state_t m = to_message(s, 1234567, true);
   expect_round_trip(m);
   // RobotState -> message -> RobotState -> message: nothing lost, bit for bit.
@@ -46,7 +46,7 @@ TEST(BridgeMessages, EveryTypeRoundTrips) {
   EXPECT_EQ(field, "");
   EXPECT_EQ(from_message(m).robot_mode, rt::RobotMode::kReflex);
   EXPECT_EQ(from_message(m).time, s.time);
-  EXPECT_EQ(from_message(m).last_motion_errors, s.last_motion_errors);
+  EXPECT_EQ(rt::ErrorSet(from_message(m).last_motion_errors), rt::ErrorSet(s.last_motion_errors));
 
   for (rt::ControlMode mode : {rt::ControlMode::kTorque, rt::ControlMode::kJointPosition, rt::ControlMode::kJointVelocity}) {
     const rt::Command command{(Vector7() << 1, -2, 3.5, 1e-300, -0.0, 7, 1e300).finished(), true};
@@ -183,7 +183,7 @@ TEST(BridgeServer, TwentyLostCommandsEndTheSessionAndConfigurationWaitsForIdle) 
   EXPECT_EQ(cycles, 20);   // the 20th lost command in a row ends the motion
   const robot_state_t s = t.server.state_message(0);
   EXPECT_EQ(s.robot_mode, robot_state_t::MODE_REFLEX);
-  EXPECT_TRUE(from_message(s).last_motion_errors.communication_constraints_violation());
+  EXPECT_TRUE(from_message(s).last_motion_errors.communication_constraints_violation);
   config_request_t recovery{};
   recovery.request = config_request_t::AUTOMATIC_ERROR_RECOVERY;
   EXPECT_TRUE(t.request(recovery).ok);

@@ -88,7 +88,7 @@ TEST(BridgeNet, RealtimeSilentControllerTriggersCommunicationConstraintsViolatio
   };
   const SessionResult result = client.control(rt::ControlMode::kTorque, silent_after_300);
   EXPECT_TRUE(result.reflex);
-  EXPECT_TRUE(result.state.last_motion_errors.communication_constraints_violation());
+  EXPECT_TRUE(result.state.last_motion_errors.communication_constraints_violation);
   ASSERT_EQ(server.wait(30s), 0) << server.output();
 
   const std::vector<robot_state_t> states = test::states_in_log(log);

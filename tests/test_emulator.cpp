@@ -268,7 +268,7 @@ TEST(EmulatorReflex, PushTripsCartesianReflexAndBrakes) {
   const auto reflex = std::find_if(states.begin(), states.end(), [](const auto& s) { return s.robot_mode == rt::RobotMode::kReflex; });
   ASSERT_NE(reflex, states.end());
   EXPECT_EQ(std::string(reflex->current_errors), "[cartesian_reflex]");
-  EXPECT_EQ(reflex->last_motion_errors, reflex->current_errors);
+  EXPECT_EQ(rt::ErrorSet(reflex->last_motion_errors), rt::ErrorSet(reflex->current_errors));
   EXPECT_GT(reflex->time.toSec(), 0.2);
   EXPECT_LT(reflex->time.toSec(), 0.3);
   EXPECT_TRUE(near(dq_of(states.back()), Vector7::Zero(), 0.0)) << "brakes closed";

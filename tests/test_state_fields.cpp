@@ -149,8 +149,11 @@ TEST(RobotStateFields, LcmConversionCarriesEveryField) {
 #define CSP_SKIP(name)
   CSP_ROBOT_STATE_FIELDS(CSP_FILL, CSP_SKIP)
 #undef CSP_FILL
-  state.current_errors.set(rt::Error::joint_reflex);
-  state.last_motion_errors.set(rt::Error::cartesian_reflex);
+  rt::ErrorSet current, last;
+  current.set(rt::Error::joint_reflex);
+  last.set(rt::Error::cartesian_reflex);
+  state.current_errors = current.errors();
+  state.last_motion_errors = last.errors();
   state.robot_mode = rt::RobotMode::kMove;
   state.time = rt::Duration(4321);
 
@@ -173,8 +176,8 @@ TEST(RobotStateFields, LcmConversionCarriesEveryField) {
 #undef CSP_CHECK
 #undef CSP_SKIP
   EXPECT_EQ(expected, next);
-  EXPECT_TRUE(back.current_errors.has(rt::Error::joint_reflex));
-  EXPECT_TRUE(back.last_motion_errors.has(rt::Error::cartesian_reflex));
+  EXPECT_TRUE(back.current_errors.joint_reflex);
+  EXPECT_TRUE(back.last_motion_errors.cartesian_reflex);
   EXPECT_EQ(back.robot_mode, rt::RobotMode::kMove);
   EXPECT_EQ(back.time.toMSec(), 4321u);
 }

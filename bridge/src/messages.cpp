@@ -223,8 +223,11 @@ std::vector<uint8_t> encode_command(rt::ControlMode mode, int64_t message_id, co
       joint_velocity_command_t m{};
       return encode_command_as(message_id, command, utime, m.dq, m);
     }
+    case rt::ControlMode::kCartesianPose:
+    case rt::ControlMode::kCartesianVelocity: break;
   }
-  throw std::invalid_argument("unknown control mode");
+  throw std::invalid_argument(std::string("the LCM bridge carries torque and joint commands, not ") +
+                              rt::control_mode_name(mode));
 }
 
 int8_t control_mode_code(rt::ControlMode mode) {
@@ -232,6 +235,8 @@ int8_t control_mode_code(rt::ControlMode mode) {
     case rt::ControlMode::kTorque: return config_request_t::CONTROL_TORQUE;
     case rt::ControlMode::kJointPosition: return config_request_t::CONTROL_JOINT_POSITION;
     case rt::ControlMode::kJointVelocity: return config_request_t::CONTROL_JOINT_VELOCITY;
+    case rt::ControlMode::kCartesianPose:
+    case rt::ControlMode::kCartesianVelocity: break;   // not carried by the LCM bridge
   }
   return -1;
 }

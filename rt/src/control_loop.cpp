@@ -7,100 +7,11 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <stdexcept>
 
-#include "csp/rt/deadline_clock.hpp"
 
 namespace csp::rt {
 namespace {
-
-// One motion's bookkeeping shared by both clocks.
-class MotionRunner {
- public:
-  MotionRunner(Emulator& emulator, const Controller& controller, const LoopOptions& options)
-      : emulator_(emulator), controller_(controller), options_(options), channel_(options.faults) {}
-
-  // Calls the controller for the current state; on an exception the motion is aborted, the cycle
-  // reported, and the exception rethrown.
-  Command call_controller(Duration period) {
-    const int64_t start = monotonic_ns();
-    try {
-      Command command = controller_(emulator_.state(), period);
-      compute_us_.add(static_cast<double>(monotonic_ns() - start) * 1e-3);
-      return command;
-    } catch (const std::exception& e) {
-      fail("the controller threw: " + std::string(e.what()));
-    } catch (...) {
-      fail("the controller threw a non-standard exception");
-    }
-  }
-
-  // One cycle with the command that was sent (or none) and whether it arrived.
-  void step(const std::optional<Command>& sent, bool arrived) {
-    CycleInfo info;
-    info.command_sent = sent.has_value();
-    info.command_received = sent && arrived;
-    if (sent) info.command = *sent;
-    if (!info.command_received && emulator_.in_motion()) ++report_.lost_commands;
-    emulator_.step(info.command_received ? &info.command : nullptr);
-    ++report_.cycles;
-    if (options_.observer) options_.observer(emulator_.state(), info);
-  }
-
-  bool network_delivers() { return channel_.delivers(report_.cycles); }
-
-  // Reflex, or motion_finished was received.
-  bool done() const { return !emulator_.in_motion(); }
-
-  // The controller's command of the last cycle of max_duration (or after a stop request) closes the
-  // motion, as if it had returned MotionFinished (a motion generator continues smoothly into it).
-  void close_when_due(Command& command) const {
-    if (options_.max_duration && static_cast<double>(report_.cycles + 1) * kDeltaT >= *options_.max_duration - 1e-9)
-      command.motion_finished = true;
-    if (options_.stop && options_.stop->load()) command.motion_finished = true;
-  }
-
-  MotionResult finish() {
-    MotionResult result;
-    result.reflex = emulator_.state().robot_mode == RobotMode::kReflex;
-    result.errors = ErrorSet(emulator_.state().last_motion_errors);
-    result.reason = emulator_.reflex_reason();
-    report_.controller_compute_us = compute_us_.percentiles();
-    result.timing = report_;
-    return result;
-  }
-
-  TimingReport& report() { return report_; }
-
- private:
-  [[noreturn]] void fail(const std::string& reason) {
-    const std::exception_ptr error = std::current_exception();
-    // This cycle's input says that the controller failed: the robot's command intake ends the
-    // motion in a braking reflex, and the observer sees the cycle like any other (nothing sent).
-    emulator_.step(CycleInput::controller_failed(reason));
-    ++report_.cycles;
-    if (options_.observer) options_.observer(emulator_.state(), CycleInfo{});
-    std::rethrow_exception(error);
-  }
-
-  Emulator& emulator_;
-  const Controller& controller_;
-  const LoopOptions& options_;
-  CommandChannel channel_;
-  TimingReport report_;
-  DurationHistogram compute_us_;
-};
-
-MotionResult run_lockstep(MotionRunner& runner) {
-  Duration period(0);
-  while (true) {
-    Command command = runner.call_controller(period);
-    runner.close_when_due(command);
-    runner.step(command, runner.network_delivers());
-    period = Duration(1);
-    if (runner.done()) break;
-  }
-  return runner.finish();
-}
 
 // Real-time scheduling for the loop thread: an error under kEnforce, else a warning to report.
 std::optional<std::string> require_realtime(RealtimeConfig config) {
@@ -113,31 +24,86 @@ std::optional<std::string> require_realtime(RealtimeConfig config) {
   return text + ": running without, timing will suffer";
 }
 
-MotionResult run_realtime(MotionRunner& runner) {
-  DeadlineClock clock;
-  Duration period(0);
-  while (true) {
-    clock.wait();
-    Command command = runner.call_controller(period);
-    runner.close_when_due(command);
-    // The command counts only if it is back before the next cycle begins (the FCI's rule). Late
-    // by `missed` deadlines, it is lost, and so are the cycles that passed meanwhile and the one the
-    // clock skips to stay on the grid: 1 + missed robot cycles in all, the period the controller is
-    // told next (libfranka's period is the robot time between two calls).
-    const int64_t missed = clock.end_cycle();
-    runner.step(command, missed == 0 && runner.network_delivers());
-    for (int64_t k = 0; k < missed && !runner.done(); ++k) runner.step(command, false);
-    period = Duration(static_cast<uint64_t>(1 + missed));
-    if (runner.done()) break;
-  }
-  TimingReport& report = runner.report();
-  report.overruns = clock.overruns();
-  report.missed_deadlines = clock.missed_deadlines();
-  report.wakeup_latency_us = clock.wakeup_latency_us().percentiles();
-  return runner.finish();
+}  // namespace
+
+MotionSession::MotionSession(Emulator& emulator, ControlMode mode, std::optional<ControllerMode> controller,
+                             const LoopOptions& options)
+    : emulator_(emulator), options_(options), channel_(options.faults) {
+  std::optional<std::string> warning;
+  if (options.clock == Clock::kRealtime) warning = require_realtime(options.realtime_config);   // before the motion
+  emulator_.start_motion(mode, controller);
+  if (warning) report_.warnings.push_back(*warning);
+  if (options.clock == Clock::kRealtime) clock_.emplace();
 }
 
-}  // namespace
+Duration MotionSession::read() {
+  if (done()) return Duration(0);
+  if (awaiting_answer_) {
+    // The state read last got no answer: its cycle (and, real time, the ones it overran) ran
+    // without a command.
+    const int64_t missed = clock_ ? clock_->end_cycle() : 0;
+    for (int64_t k = 0; k <= missed && !done(); ++k) step(std::nullopt, false);
+  }
+  if (clock_ && !done()) clock_->wait();
+  const Duration now = emulator_.state().time;
+  const Duration period = first_read_ ? Duration(0) : now - last_read_time_;
+  first_read_ = false;
+  last_read_time_ = now;
+  awaiting_answer_ = !done();
+  read_ns_ = monotonic_ns();
+  return period;
+}
+
+void MotionSession::write(Command command) {
+  if (!awaiting_answer_) throw std::logic_error("a command must answer a state: read() the next state first");
+  awaiting_answer_ = false;
+  compute_us_.add(static_cast<double>(monotonic_ns() - read_ns_) * 1e-3);
+  // The command of the last cycle of max_duration (or after a stop request) closes the motion, as
+  // if the controller had marked it finished (a motion generator continues smoothly into it).
+  if (options_.max_duration && static_cast<double>(report_.cycles + 1) * kDeltaT >= *options_.max_duration - 1e-9)
+    command.motion_finished = true;
+  if (options_.stop && options_.stop->load()) command.motion_finished = true;
+  // Real time: the command counts only if it is back before the next cycle begins. Late by
+  // `missed` deadlines, it is lost, and so are the cycles that passed meanwhile: 1 + missed robot
+  // cycles in all, the period the controller is told next.
+  const int64_t missed = clock_ ? clock_->end_cycle() : 0;
+  step(command, missed == 0 && channel_.delivers(report_.cycles));
+  for (int64_t k = 0; k < missed && !done(); ++k) step(command, false);
+}
+
+void MotionSession::fail(std::string_view reason) {
+  awaiting_answer_ = false;
+  if (done()) return;
+  emulator_.step(CycleInput::controller_failed(reason));
+  ++report_.cycles;
+  if (options_.observer) options_.observer(emulator_.state(), CycleInfo{});
+}
+
+void MotionSession::step(const std::optional<Command>& sent, bool arrived) {
+  CycleInfo info;
+  info.command_sent = sent.has_value();
+  info.command_received = sent && arrived;
+  if (sent) info.command = *sent;
+  if (!info.command_received && emulator_.in_motion()) ++report_.lost_commands;
+  emulator_.step(info.command_received ? &info.command : nullptr);
+  ++report_.cycles;
+  if (options_.observer) options_.observer(emulator_.state(), info);
+}
+
+MotionResult MotionSession::result() const {
+  MotionResult result;
+  result.reflex = emulator_.state().robot_mode == RobotMode::kReflex;
+  result.errors = ErrorSet(emulator_.state().last_motion_errors);
+  result.reason = emulator_.reflex_reason();
+  result.timing = report_;
+  result.timing.controller_compute_us = compute_us_.percentiles();
+  if (clock_) {
+    result.timing.overruns = clock_->overruns();
+    result.timing.missed_deadlines = clock_->missed_deadlines();
+    result.timing.wakeup_latency_us = clock_->wakeup_latency_us().percentiles();
+  }
+  return result;
+}
 
 CommandChannel::CommandChannel(const CommandFaults& faults) : faults_(faults), rng_(faults.seed) {}
 
@@ -164,13 +130,23 @@ std::vector<std::string> enable_realtime_scheduling() {
 }
 
 MotionResult run_motion(Emulator& emulator, ControlMode mode, const Controller& controller,
-                        const LoopOptions& options) {
-  std::optional<std::string> warning;
-  if (options.clock == Clock::kRealtime) warning = require_realtime(options.realtime_config);   // before the motion
-  emulator.start_motion(mode);
-  MotionRunner runner(emulator, controller, options);
-  if (warning) runner.report().warnings.push_back(*warning);
-  return options.clock == Clock::kLockstep ? run_lockstep(runner) : run_realtime(runner);
+                        const LoopOptions& options, std::optional<ControllerMode> controller_mode) {
+  MotionSession session(emulator, mode, controller_mode, options);
+  while (!session.done()) {
+    const Duration period = session.read();
+    Command command;
+    try {
+      command = controller(session.state(), period);
+    } catch (const std::exception& e) {
+      session.fail("the controller threw: " + std::string(e.what()));
+      throw;
+    } catch (...) {
+      session.fail("the controller threw a non-standard exception");
+      throw;
+    }
+    session.write(command);
+  }
+  return session.result();
 }
 
 }  // namespace csp::rt

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "csp/rt/cartesian_motion.hpp"
 #include "state_arrays.hpp"
 
 namespace csp::rt {
@@ -22,6 +23,9 @@ constexpr int kMaxConsecutiveLost = 20;         // FCI: 20 lost commands in a ro
 constexpr double kMaxPayload = 3.0;              // [kg] Franka's datasheet payload (Panda and FR3)
 constexpr double kMaxLoadDistance = 1.0;         // [m] load CoM from the flange: beyond the arm's own size
 constexpr double kMaxJointStiffness = 10000.0;   // [N m/rad] the joint impedance stays stable at 0.5 ms substeps
+// Robot::setCartesianImpedance's ranges (libfranka robot.h): translation [10, 3000] N/m, rotation [1, 300] N m/rad.
+constexpr double kMinTranslationalStiffness = 10.0, kMaxTranslationalStiffness = 3000.0;
+constexpr double kMinRotationalStiffness = 1.0, kMaxRotationalStiffness = 300.0;
 
 template <typename Vector>
 bool within(const Vector& v, double low, double high) {
@@ -48,6 +52,14 @@ std::string collision_behavior_problem(const CollisionBehavior& b) {
 
 std::string joint_stiffness_problem(const Vector7& stiffness) {
   return within(stiffness, 0.0, kMaxJointStiffness) ? "" : "expected 7 finite stiffnesses from 0 to 10000 N m/rad";
+}
+
+std::string cartesian_stiffness_problem(const Vector6& stiffness) {
+  if (!within(stiffness.head<3>(), kMinTranslationalStiffness, kMaxTranslationalStiffness))
+    return "expected translational stiffnesses (x, y, z) from 10 to 3000 N/m";
+  if (!within(stiffness.tail<3>(), kMinRotationalStiffness, kMaxRotationalStiffness))
+    return "expected rotational stiffnesses (R, P, Y) from 1 to 300 N m/rad";
+  return {};
 }
 
 std::string load_problem(const RigidBodyInertia& load) {
@@ -84,6 +96,19 @@ const char* control_mode_name(ControlMode mode) {
     case ControlMode::kTorque: return "torque";
     case ControlMode::kJointPosition: return "joint_position";
     case ControlMode::kJointVelocity: return "joint_velocity";
+    case ControlMode::kCartesianPose: return "cartesian_pose";
+    case ControlMode::kCartesianVelocity: return "cartesian_velocity";
+  }
+  return "unknown";
+}
+
+bool is_cartesian(ControlMode mode) { return mode == ControlMode::kCartesianPose || mode == ControlMode::kCartesianVelocity; }
+
+const char* controller_mode_name(ControllerMode mode) {
+  switch (mode) {
+    case ControllerMode::kJointImpedance: return "joint_impedance";
+    case ControllerMode::kCartesianImpedance: return "cartesian_impedance";
+    case ControllerMode::kExternalController: return "external_controller";
   }
   return "unknown";
 }
@@ -99,11 +124,33 @@ CollisionBehavior default_collision_behavior() {
 
 Vector7 default_joint_stiffness() { return (Vector7() << 3000, 3000, 3000, 2500, 2500, 2000, 2000).finished(); }
 
+Vector6 default_cartesian_stiffness() { return (Vector6() << 3000, 3000, 3000, 300, 300, 300).finished(); }
+
 namespace {
-// Why the robot refuses a command that is not finite (reflex_reason()).
-std::string not_finite_reason(ControlMode mode, const Vector7& values) {
+template <typename Values>
+bool all_finite(const Values& values) {
+  return std::all_of(std::begin(values), std::end(values), [](double v) { return std::isfinite(v); });
+}
+
+// Why the robot refuses a command that is not finite (reflex_reason()), or empty: every value the
+// motion's mode and controller read must be a number. (Only a refusal builds a message: no
+// allocation in a normal cycle.)
+std::string not_finite_reason(ControlMode mode, ControllerMode controller, const Command& command) {
+  const bool pose = mode == ControlMode::kCartesianPose && !all_finite(command.O_T_EE_c);
+  const bool twist = mode == ControlMode::kCartesianVelocity && !all_finite(command.O_dP_EE_c);
+  const bool elbow = is_cartesian(mode) && command.elbow && !all_finite(*command.elbow);
+  const bool values = !is_cartesian(mode) && !command.values.allFinite();
+  const bool torque =
+      mode != ControlMode::kTorque && controller == ControllerMode::kExternalController && !command.torque.allFinite();
+  if (!pose && !twist && !elbow && !values && !torque) return {};
   std::ostringstream what;
-  what << "the " << control_mode_name(mode) << " command is not finite (" << values.transpose() << ")";
+  what << "the " << control_mode_name(mode) << " command is not finite (";
+  if (pose) what << "O_T_EE_c " << from_array<Eigen::Matrix4d>(command.O_T_EE_c).reshaped().transpose();
+  else if (twist) what << "O_dP_EE_c " << from_array<Vector6>(command.O_dP_EE_c).transpose();
+  else if (elbow) what << "elbow " << (*command.elbow)[0] << " " << (*command.elbow)[1];
+  else if (values) what << command.values.transpose();
+  else what << "torque " << command.torque.transpose();
+  what << ")";
   return what.str();
 }
 }  // namespace
@@ -116,6 +163,7 @@ Emulator::Emulator(const EmulatorSettings& settings)
   if (settings_.substeps < 1) throw std::invalid_argument("substeps: expected at least 1");
   require(collision_behavior_problem(settings_.collision), "collision behavior");
   require(joint_stiffness_problem(settings_.joint_stiffness), "joint impedance");
+  require(cartesian_stiffness_problem(settings_.cartesian_stiffness), "Cartesian impedance");
   F_T_NE_ = internal_parameters_.F_T_EE;
   PlantState& arm = plant_state_;
   arm.q = settings_.q_initial;
@@ -163,12 +211,23 @@ void Emulator::set_joint_impedance(const Vector7& stiffness) {
   settings_.joint_stiffness = stiffness;
 }
 
+void Emulator::set_cartesian_impedance(const Vector6& stiffness) {
+  require_no_motion("setCartesianImpedance");
+  require(cartesian_stiffness_problem(stiffness), "setCartesianImpedance");
+  settings_.cartesian_stiffness = stiffness;
+}
+
 void Emulator::set_load(const RigidBodyInertia& load) {
   require_no_motion("setLoad");
   require(load_problem(load), "setLoad");
   internal_parameters_.load = load;
   rebuild_internal_model();
   publish();
+}
+
+void Emulator::set_carried_object(const RigidBodyInertia& object) {
+  require(load_problem(object), "carried object");
+  plant_ = with_load(plant_, combine(settings_.plant.load, object));
 }
 
 void Emulator::set_EE(const Transform& NE_T_EE) {
@@ -205,19 +264,33 @@ void Emulator::automatic_error_recovery() {
   reflex_reason_.clear();
 }
 
-void Emulator::start_motion(ControlMode mode) {
+void Emulator::start_motion(ControlMode mode, std::optional<ControllerMode> controller) {
+  if (mode == ControlMode::kTorque && controller && *controller != ControllerMode::kExternalController)
+    throw std::invalid_argument(std::string("a torque motion is its own controller, not ") + controller_mode_name(*controller));
   if (mode_) throw InvalidOperation("a motion is already running");
   if (phase_ != Phase::kIdle)
     throw InvalidOperation("the robot is in Reflex mode " + std::string(state_.current_errors) +
                            ": call automaticErrorRecovery() first");
   mode_ = mode;
+  controller_ = mode == ControlMode::kTorque ? ControllerMode::kExternalController
+                                             : controller.value_or(ControllerMode::kJointImpedance);
   phase_ = Phase::kMove;
   state_.robot_mode = RobotMode::kMove;
-  // A motion starts from the desired position the robot holds (q_d), at rest.
-  motion_generator_.q_c = torque_loop_.q_hold;
-  motion_generator_.dq_c.setZero();
-  motion_generator_.ddq_c.setZero();
-  motion_generator_.first_command = true;
+  // A motion starts at rest where the arm is (what Idle publishes as q_d; libfranka 0.15's examples
+  // start from q, 0.9's from q_d, libfranka's filter from q_d): its EE pose and elbow are where a
+  // Cartesian motion generator starts.
+  MotionGenerator& g = motion_generator_;
+  g.q_c = plant_state_.q;
+  g.dq_c.setZero();
+  g.ddq_c.setZero();
+  g.first_command = true;
+  forward_kinematics(internal_, internal_data_, g.q_c);
+  g.O_T_EE_c = internal_data_.O_T_EE;
+  g.O_dP_EE_c.setZero();
+  g.O_ddP_EE_c.setZero();
+  g.elbow_c = g.q_c[2];
+  g.delbow_c = g.ddelbow_c = 0.0;
+  g.elbow_sign = elbow_sign(g.q_c[3]);
   reception_.restart();
 }
 
@@ -260,8 +333,9 @@ void Emulator::take_command(const CycleInput& input) {
 
   const Command* command = input.kind == CycleInput::Kind::kCommand ? input.command : nullptr;
   std::string refusal;
+  motion_generator_reason_.clear();
   if (input.kind == CycleInput::Kind::kControllerFailed) refusal = input.failure;
-  else if (command && !command->values.allFinite()) refusal = not_finite_reason(*mode_, command->values);
+  else if (command) refusal = not_finite_reason(*mode_, controller_, *command);
   const bool received = command && refusal.empty();
   reception_.record(received);
 
@@ -271,10 +345,14 @@ void Emulator::take_command(const CycleInput& input) {
     counters_.max_consecutive_lost = std::max(counters_.max_consecutive_lost, reception_.consecutive_lost);
     if (reception_.consecutive_lost >= kMaxConsecutiveLost) errors.set(Error::communication_constraints_violation);
   }
-  if (refusal.empty())
-    errors.merge(*mode_ == ControlMode::kTorque ? accept_torque(received ? command : nullptr)
-                                                : run_motion_generator(received ? command : nullptr));
-  if (!refusal.empty() || errors) enter_reflex(errors, refusal);
+  if (refusal.empty()) {
+    const Command* accepted = received ? command : nullptr;
+    // The user's torque: alone (kTorque), or next to a motion generator (kExternalController).
+    if (controller_ == ControllerMode::kExternalController)
+      errors.merge(accept_torque(!accepted ? nullptr : *mode_ == ControlMode::kTorque ? &accepted->values : &accepted->torque));
+    if (*mode_ != ControlMode::kTorque) errors.merge(run_motion_generator(accepted));
+  }
+  if (!refusal.empty() || errors) enter_reflex(errors, refusal.empty() ? motion_generator_reason_ : refusal);
   reception_.finish_requested = received && command->motion_finished;
 }
 
@@ -298,10 +376,10 @@ void Emulator::CommandReception::record(bool arrived) {
 
 // Torque mode: the user's torque without gravity (tau_J_d); a lost command reuses the last one.
 // Its change per cycle is bounded by dtau_max.
-ErrorSet Emulator::accept_torque(const Command* command) {
+ErrorSet Emulator::accept_torque(const Vector7* torque) {
   ErrorSet errors;
   Vector7& last = reception_.last_user_torque;
-  const Vector7 user_torque = command ? command->values : last;
+  const Vector7 user_torque = torque ? *torque : last;
   const Vector7 dtau_max = plant_.parameters().joint_limits.dtau_max;
   if (((user_torque - last).array().abs() > dtau_max.array() * kDeltaT + kLimitTolerance).any())
     errors.set(Error::controller_torque_discontinuity);
@@ -309,47 +387,64 @@ ErrorSet Emulator::accept_torque(const Command* command) {
   return errors;
 }
 
-// The external joint motion generator: commanded q_c (or dq_c) of this cycle, its finite-difference
-// derivatives and libfranka's joint_motion_generator_* checks. A lost command is extrapolated with
-// constant acceleration.
+// The external motion generator: this cycle's commanded joint trajectory point q_c, dq_c (from
+// the joint command, or from the Cartesian command through the robot's inverse kinematics), its
+// finite-difference derivatives and the joint-level checks with the motion generator's own error
+// names (libfranka: joint_motion_generator_* or cartesian_motion_generator_joint_*).
 ErrorSet Emulator::run_motion_generator(const Command* command) {
   const JointLimits& limits = plant_.parameters().joint_limits;
   MotionGenerator& g = motion_generator_;
-  ErrorSet errors;
+  const bool cartesian = is_cartesian(*mode_);
   Vector7 q_c, dq_c;
+  ErrorSet errors = cartesian ? cartesian_setpoint(command, q_c, dq_c) : joint_setpoint(command, q_c, dq_c);
+  if (errors) return errors;
+  if (command) g.first_command = false;
+  const Vector7 ddq_c = (dq_c - g.dq_c) / kDeltaT;
+  const Vector7 dddq_c = (ddq_c - g.ddq_c) / kDeltaT;
+
+  const JointTrajectoryErrors flags =
+      cartesian ? JointTrajectoryErrors{Error::cartesian_motion_generator_joint_position_limits_violation,
+                                        Error::cartesian_motion_generator_joint_velocity_limits_violation,
+                                        Error::cartesian_motion_generator_joint_velocity_discontinuity,
+                                        Error::cartesian_motion_generator_joint_acceleration_discontinuity}
+                : JointTrajectoryErrors{Error::joint_motion_generator_position_limits_violation,
+                                        Error::joint_motion_generator_velocity_limits_violation,
+                                        Error::joint_motion_generator_velocity_discontinuity,
+                                        Error::joint_motion_generator_acceleration_discontinuity};
+  const Vector7 upper = limits.dq_upper(q_c), lower = limits.dq_lower(q_c);
+  for (int i = 0; i < kNumJoints; ++i) {
+    if (q_c[i] > limits.q_max[i] + kLimitTolerance || q_c[i] < limits.q_min[i] - kLimitTolerance)
+      errors.set(flags.position);
+    if (dq_c[i] > upper[i] + kLimitTolerance || dq_c[i] < lower[i] - kLimitTolerance) errors.set(flags.velocity);
+    if (std::abs(ddq_c[i]) > limits.ddq_max[i] + kLimitTolerance) errors.set(flags.velocity_discontinuity);
+    if (std::abs(dddq_c[i]) > limits.dddq_max[i] + kLimitTolerance) errors.set(flags.acceleration_discontinuity);
+  }
+  g.q_c = q_c;
+  g.dq_c = dq_c;
+  g.ddq_c = ddq_c;
+  return errors;
+}
+
+// A joint position or velocity command; a lost one is extrapolated with constant acceleration.
+ErrorSet Emulator::joint_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c) {
+  const MotionGenerator& g = motion_generator_;
+  ErrorSet errors;
   if (!command) {
     dq_c = g.dq_c + g.ddq_c * kDeltaT;
     q_c = g.q_c + dq_c * kDeltaT;
   } else if (*mode_ == ControlMode::kJointPosition) {
     q_c = command->values;
-    if (g.first_command && ((q_c - g.q_c).array().abs() > limits.dq_max.array() * kDeltaT).any()) {
-      // The robot rejects the start pose itself; the jump is not also a velocity error.
+    // The robot rejects the start pose itself; the jump is not also a velocity error. A first
+    // command within the tolerance starts the trajectory at rest where it says (libfranka's
+    // examples start from the measured q, 0.9's from q_d: both a little off the held pose).
+    if (g.first_command &&
+        ((q_c - g.q_c).array().abs() > plant_.parameters().joint_limits.dq_max.array() * kDeltaT).any())
       errors.set(Error::joint_position_motion_generator_start_pose_invalid);
-      return errors;
-    }
-    dq_c = (q_c - g.q_c) / kDeltaT;
+    dq_c = g.first_command ? Vector7::Zero().eval() : ((q_c - g.q_c) / kDeltaT).eval();
   } else {
     dq_c = command->values;
     q_c = g.q_c + dq_c * kDeltaT;
   }
-  if (command) g.first_command = false;
-  const Vector7 ddq_c = (dq_c - g.dq_c) / kDeltaT;
-  const Vector7 dddq_c = (ddq_c - g.ddq_c) / kDeltaT;
-
-  const Vector7 upper = limits.dq_upper(q_c), lower = limits.dq_lower(q_c);
-  for (int i = 0; i < kNumJoints; ++i) {
-    if (q_c[i] > limits.q_max[i] + kLimitTolerance || q_c[i] < limits.q_min[i] - kLimitTolerance)
-      errors.set(Error::joint_motion_generator_position_limits_violation);
-    if (dq_c[i] > upper[i] + kLimitTolerance || dq_c[i] < lower[i] - kLimitTolerance)
-      errors.set(Error::joint_motion_generator_velocity_limits_violation);
-    if (std::abs(ddq_c[i]) > limits.ddq_max[i] + kLimitTolerance)
-      errors.set(Error::joint_motion_generator_velocity_discontinuity);
-    if (std::abs(dddq_c[i]) > limits.dddq_max[i] + kLimitTolerance)
-      errors.set(Error::joint_motion_generator_acceleration_discontinuity);
-  }
-  g.q_c = q_c;
-  g.dq_c = dq_c;
-  g.ddq_c = ddq_c;
   return errors;
 }
 
@@ -393,12 +488,15 @@ void Emulator::integrate() {
     return;
   }
   gravity_compensation_torque();
-  // The torque loop's setpoint: the user's torque (torque mode), the robot's joint impedance (Idle,
-  // motion generators), or a reflex's braking.
-  const bool impedance = phase_ == Phase::kIdle || (phase_ == Phase::kMove && *mode_ != ControlMode::kTorque);
+  // The torque loop's setpoint: the user's torque (kExternalController), the robot's joint
+  // impedance (Idle, motion generators), its Cartesian impedance, or a reflex's braking.
+  const bool moving = phase_ == Phase::kMove;
+  const bool impedance = phase_ == Phase::kIdle || (moving && controller_ == ControllerMode::kJointImpedance);
+  const bool cartesian = moving && controller_ == ControllerMode::kCartesianImpedance;
   const bool braking = phase_ == Phase::kBraking;
   Vector7 mass_diagonal = Vector7::Zero();
-  if (impedance || braking) {
+  CartesianImpedance target;
+  if (impedance || cartesian || braking) {
     crba(internal_, internal_data_, arm.q);
     mass_diagonal = internal_data_.mass_matrix.diagonal();
   }
@@ -406,6 +504,7 @@ void Emulator::integrate() {
   const Vector7 damping = 2.0 * (stiffness.cwiseProduct(mass_diagonal)).cwiseSqrt();   // critical
   const Vector7 q_target = phase_ == Phase::kIdle ? loop.q_hold : motion_generator_.q_c;
   const Vector7 dq_target = phase_ == Phase::kIdle ? Vector7::Zero() : motion_generator_.dq_c;
+  if (cartesian) target = cartesian_impedance_target(q_target, dq_target);   // uses the mass matrix at q
 
   const double h = kDeltaT / settings_.substeps;
   const bool static_friction = (plant_.parameters().friction.breakaway.array() > 0.0).any();
@@ -415,6 +514,7 @@ void Emulator::integrate() {
     // The robot's controllers run faster than the FCI: impedance and braking act every substep.
     Vector7 setpoint = reception_.last_user_torque;
     if (impedance) setpoint = stiffness.cwiseProduct(q_target - arm.q) + damping.cwiseProduct(dq_target - arm.dq);
+    if (cartesian) setpoint = cartesian_impedance_torque(target, q_target, dq_target, damping);
     if (braking) setpoint = -mass_diagonal.cwiseProduct(arm.dq) / kBrakingTimeConstant;
     loop.tau_motor += alpha * (setpoint + loop.gravity - loop.tau_motor);
 
@@ -536,10 +636,10 @@ void Emulator::check_limits_and_collisions() {
 }
 
 // A command with motion_finished ends the motion; the robot then holds the last desired position
-// (torque mode: where the arm is).
+// (the user's torque drove the arm: where the arm is).
 void Emulator::end_motion_if_finished() {
   if (phase_ != Phase::kMove || !reception_.finish_requested) return;
-  torque_loop_.q_hold = *mode_ == ControlMode::kTorque ? plant_state_.q : motion_generator_.q_c;
+  torque_loop_.q_hold = controller_ == ControllerMode::kExternalController ? plant_state_.q : motion_generator_.q_c;
   mode_.reset();
   phase_ = Phase::kIdle;
   state_.robot_mode = RobotMode::kIdle;
@@ -555,7 +655,7 @@ void Emulator::publish() {
   const MotionGenerator& g = motion_generator_;
   const Estimator& e = estimator_;
   const bool motion_generator = mode_ && *mode_ != ControlMode::kTorque;
-  const Vector7 q_d = motion_generator ? g.q_c : (phase_ == Phase::kIdle ? torque_loop_.q_hold : arm.q);
+  const Vector7 q_d = motion_generator ? g.q_c : arm.q;   // no motion: the robot desires where it is
 
   assign(s.q, arm.q);
   assign(s.dq, arm.dq);
@@ -566,12 +666,13 @@ void Emulator::publish() {
   assign(s.dtheta, arm.dq);
   assign(s.tau_J, e.tau_J_measured);
   assign(s.dtau_J, e.dtau_J);
-  assign(s.tau_J_d, mode_ == ControlMode::kTorque ? reception_.last_user_torque : Vector7::Zero());
+  const bool user_torque = mode_ && controller_ == ControllerMode::kExternalController;
+  assign(s.tau_J_d, user_torque ? reception_.last_user_torque : Vector7::Zero());
   assign(s.tau_ext_hat_filtered, e.tau_ext_filtered);
   assign(s.O_F_ext_hat_K, e.O_F_ext);
   assign(s.K_F_ext_hat_K, e.K_F_ext);
-  s.elbow = {arm.q[2], arm.q[3] < 0.0 ? -1.0 : 1.0};
-  s.elbow_d = s.elbow_c = {q_d[2], q_d[3] < 0.0 ? -1.0 : 1.0};
+  s.elbow = {arm.q[2], elbow_sign(arm.q[3])};
+  s.elbow_d = {q_d[2], elbow_sign(q_d[3])};
 
   // Kinematics of the robot's model (forward_kinematics at q ran in the estimator).
   assign(s.O_T_EE, internal_data_.O_T_EE);
@@ -579,13 +680,15 @@ void Emulator::publish() {
   assign(s.F_T_NE, F_T_NE_);
   assign(s.NE_T_EE, NE_T_EE_);
   assign(s.EE_T_K, p.EE_T_K);
-  if (motion_generator) forward_kinematics(internal_, internal_data_, q_d);
+  forward_kinematics(internal_, internal_data_, q_d);   // the desired pose, also the one Idle holds
   assign(s.O_T_EE_d, internal_data_.O_T_EE);
-  s.O_T_EE_c = s.O_T_EE_d;
   assign(s.O_ddP_O, Vector3(-p.gravity));
 
   // The motion generator's rates as the robot reports them (zero in torque mode, as libfranka's):
   // the EE twist J(q_c) dq_c, the EE acceleration J ddq_c + dJ/dt dq_c, the elbow's joint-3 rates.
+  // A Cartesian motion generator's commanded pose, twist, acceleration and elbow are its own:
+  // what the user sent (O_T_EE_c, elbow_c) and their finite differences, as libfranka's
+  // limitRate reads them back; O_T_EE_d and elbow_d are where the inverse kinematics went.
   Vector6 O_dP_EE = Vector6::Zero(), O_ddP_EE = Vector6::Zero();
   if (motion_generator) {
     Matrix6x7 J, dJ;
@@ -595,10 +698,21 @@ void Emulator::publish() {
     O_ddP_EE = J * g.ddq_c + dJ * g.dq_c;
   }
   assign(s.O_dP_EE_d, O_dP_EE);
-  s.O_dP_EE_c = s.O_dP_EE_d;
-  assign(s.O_ddP_EE_c, O_ddP_EE);
-  s.delbow_c = {motion_generator ? g.dq_c[2] : 0.0, 0.0};
-  s.ddelbow_c = {motion_generator ? g.ddq_c[2] : 0.0, 0.0};
+  if (mode_ && is_cartesian(*mode_)) {
+    assign(s.O_T_EE_c, g.O_T_EE_c);
+    assign(s.O_dP_EE_c, g.O_dP_EE_c);
+    assign(s.O_ddP_EE_c, g.O_ddP_EE_c);
+    s.elbow_c = {g.elbow_c, g.elbow_sign};
+    s.delbow_c = {g.delbow_c, 0.0};
+    s.ddelbow_c = {g.ddelbow_c, 0.0};
+  } else {
+    s.O_T_EE_c = s.O_T_EE_d;
+    s.O_dP_EE_c = s.O_dP_EE_d;
+    assign(s.O_ddP_EE_c, O_ddP_EE);
+    s.elbow_c = s.elbow_d;
+    s.delbow_c = {motion_generator ? g.dq_c[2] : 0.0, 0.0};
+    s.ddelbow_c = {motion_generator ? g.ddq_c[2] : 0.0, 0.0};
+  }
 
   assign_inertia(p.end_effector, s.m_ee, s.F_x_Cee, s.I_ee);
   assign_inertia(p.load, s.m_load, s.F_x_Cload, s.I_load);

@@ -1,7 +1,11 @@
 #include "csp/rt/scenario.hpp"
 
+#include <dlfcn.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <system_error>
 
 #include "csp/io/yaml_field.hpp"
 
@@ -164,7 +168,8 @@ Scenario load_scenario(const std::string& path) {
   const YAML::Node root = load_yaml_file(path, "scenario file");
   const Field top(root, path, "");
   top.allow_only({"name", "robot", "end_effector", "joint_limits", "plant", "robot_model", "initial_q", "duration",
-                  "clock", "seed", "robot_settings", "controller", "faults", "external_wrenches"});
+                  "clock", "seed", "robot_settings", "controller", "faults", "external_wrenches",
+                  "hand", "vacuum_gripper"});
   Scenario s;
   s.path = path;
   s.name = top["name"].text();
@@ -228,11 +233,35 @@ Scenario load_scenario(const std::string& path) {
     const Field wrenches = top["external_wrenches"];
     for (std::size_t i = 0; i < wrenches.sequence_size(); ++i) s.emulator.external_wrenches.push_back(read_wrench(wrenches[i]));
   }
+  if (top.has("hand")) s.hand = read_hand_settings(top["hand"]);
+  if (top.has("vacuum_gripper")) s.vacuum_gripper = read_vacuum_settings(top["vacuum_gripper"]);
   s.emulator.seed = s.seed;
   s.command_faults.seed = s.seed + 1;   // a stream of its own: noise settings do not shift command losses
   return s;
 }
 
-std::string default_scenario_path() { return std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml"; }
+// The source tree's configs/ while it exists (the build tree's programs and tests), else the copy
+// installed next to the binary holding this code (<prefix>/lib/libcsp_franka.so or <prefix>/bin/csp
+// -> <prefix>/share/csp/configs), so that an installed CSP, or a Debian package installed under
+// another prefix than the build's, finds its scenarios without the sources.
+std::string shipped_config_dir() {
+  if (const char* dir = std::getenv("CSP_CONFIG_DIR"); dir != nullptr && *dir != '\0') return dir;
+  std::error_code error;
+  const std::filesystem::path source = std::filesystem::path(CSP_SOURCE_DIR) / "configs";
+  if (std::filesystem::is_directory(source, error)) return source.string();
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<void*>(&shipped_config_dir), &info) != 0 && info.dli_fname != nullptr) {
+    const std::filesystem::path installed =
+        std::filesystem::path(info.dli_fname).parent_path().parent_path() / "share" / "csp" / "configs";
+    if (std::filesystem::is_directory(installed, error)) return installed.string();
+  }
+  return CSP_INSTALLED_CONFIG_DIR;
+}
+
+std::string shipped_scenario_path(const std::string& name) {
+  return shipped_config_dir() + "/scenarios/" + name + ".yaml";
+}
+
+std::string default_scenario_path() { return shipped_scenario_path("default"); }
 
 }  // namespace csp::rt

@@ -3,7 +3,8 @@
 // mapped to joint torques by the Jacobian's transpose, plus Coriolis. Runs 8 s, through the
 // default scenario's push on the hand at 6 s, and prints the largest position error.
 //
-// usage: csp_example_cartesian_impedance [scenario.yaml]
+// usage: csp_example_cartesian_impedance <robot-hostname or scenario.yaml>
+// (a hostname or IP address runs on $CSP_SCENARIO or configs/scenarios/libfranka_panda.yaml)
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -15,7 +16,11 @@
 #include <franka/robot.h>
 
 int main(int argc, char** argv) {
-  const std::string scenario = argc > 1 ? argv[1] : csp::rt::default_scenario_path();
+  if (argc != 2) {
+    std::cerr << "Usage: " << argv[0] << " <robot-hostname or scenario.yaml>" << std::endl;
+    return -1;
+  }
+  const std::string scenario = argv[1];
   try {
     franka::Robot robot(scenario);
     franka::Model model = robot.loadModel();

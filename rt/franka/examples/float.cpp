@@ -2,7 +2,8 @@
 // commands only a little joint damping lets the arm float. Prints how far it drifts in 2 s (the
 // robot's model is not the arm: what remains is the model error).
 //
-// usage: csp_example_float [scenario.yaml]
+// usage: csp_example_float <robot-hostname or scenario.yaml>
+// (a hostname or IP address runs on $CSP_SCENARIO or configs/scenarios/libfranka_panda.yaml)
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -11,7 +12,11 @@
 #include <franka/robot.h>
 
 int main(int argc, char** argv) {
-  const std::string scenario = argc > 1 ? argv[1] : csp::rt::default_scenario_path();
+  if (argc != 2) {
+    std::cerr << "Usage: " << argv[0] << " <robot-hostname or scenario.yaml>" << std::endl;
+    return -1;
+  }
+  const std::string scenario = argv[1];
   try {
     franka::Robot robot(scenario);
     const std::array<double, 7> damping{{5, 5, 5, 5, 2, 2, 1}};   // [N m s/rad]

@@ -2,7 +2,8 @@
 // with the stiffness and damping of libfranka's joint_impedance_control example, plus the
 // Coriolis torques of the robot's model. Prints the RMS tracking error.
 //
-// usage: csp_example_joint_impedance [scenario.yaml]
+// usage: csp_example_joint_impedance <robot-hostname or scenario.yaml>
+// (a hostname or IP address runs on $CSP_SCENARIO or configs/scenarios/libfranka_panda.yaml)
 #include <cmath>
 #include <iostream>
 
@@ -11,7 +12,11 @@
 #include <franka/robot.h>
 
 int main(int argc, char** argv) {
-  const std::string scenario = argc > 1 ? argv[1] : csp::rt::default_scenario_path();
+  if (argc != 2) {
+    std::cerr << "Usage: " << argv[0] << " <robot-hostname or scenario.yaml>" << std::endl;
+    return -1;
+  }
+  const std::string scenario = argv[1];
   try {
     franka::Robot robot(scenario);
     franka::Model model = robot.loadModel();

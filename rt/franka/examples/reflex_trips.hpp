@@ -8,6 +8,9 @@
 
 #include <franka/robot.h>
 
+#include "csp/rt/errors.hpp"
+#include "csp/rt/scenario.hpp"
+
 namespace csp_examples {
 
 struct ReflexTrip {

@@ -3,10 +3,13 @@
 //
 // usage: csp_example_reflexes [scenario.yaml]
 #include <iostream>
+#include <stdexcept>
 
 #include <franka/exception.h>
 #include <franka/robot.h>
 
+#include "csp/franka_access.hpp"
+#include "csp/rt/scenario.hpp"
 #include "reflex_trips.hpp"
 
 namespace {
@@ -28,7 +31,7 @@ int main(int argc, char** argv) {
     for (const csp_examples::ReflexTrip& trip : csp_examples::reflex_trips()) {
       csp::rt::Scenario scenario = base;
       if (trip.prepare) trip.prepare(scenario);
-      franka::Robot robot(scenario);
+      csp::franka_access::EmulatedRobot robot(scenario);
       std::cout << csp::rt::error_name(trip.error) << ": " << trip.how << "\n  ";
       try {
         trip.run(robot);
@@ -47,11 +50,11 @@ int main(int argc, char** argv) {
       }
     }
 
-    franka::Robot robot(base);
+    csp::franka_access::EmulatedRobot robot(base);
     std::cout << "non-finite command: a torque controller returns NaN after 0.1 s\n  ";
     try {
       robot.control(csp_examples::nan_controller());
-    } catch (const franka::CommandException& e) {
+    } catch (const std::invalid_argument& e) {   // libfranka refuses a NaN command
       std::cout << e.what() << " -> robot mode " << csp::rt::robot_mode_name(robot.readOnce().robot_mode) << '\n';
     }
   } catch (const std::exception& e) {

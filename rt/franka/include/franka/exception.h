@@ -1,12 +1,12 @@
-// The exceptions of libfranka, with its names and hierarchy.
+// The exceptions of libfranka, with its names and hierarchy. Self-contained, C++14.
 #pragma once
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
-#include <utility>
 #include <vector>
 
-#include "franka/log.h"
+#include "franka/logging/robot_state_log.hpp"
 
 namespace franka {
 
@@ -20,19 +20,32 @@ struct ModelException : public Exception {
   using Exception::Exception;
 };
 
-// The robot cannot be reached (in CSP: never thrown, kept so that handlers compile).
+// The robot cannot be reached. In CSP: the robot's address names no scenario that can be loaded
+// (docs/franka_api.md, "The robot's address").
 struct NetworkException : public Exception {
   using Exception::Exception;
 };
 
-// A motion ended in a reflex, or could not start. `log` holds the last cycles before it.
-struct ControlException : public Exception {
-  explicit ControlException(const std::string& what, std::vector<Record> log = {})
-      : Exception(what), log(std::move(log)) {}
-  const std::vector<Record> log;
+// The robot answered something unexpected (kept so that handlers compile; CSP does not throw it).
+struct ProtocolException : public Exception {
+  using Exception::Exception;
 };
 
-// A command was invalid (in CSP: a non-finite control value).
+// The robot's server version is not the one this library speaks (kept so that handlers compile).
+struct IncompatibleVersionException : public Exception {
+  IncompatibleVersionException(uint16_t server_version, uint16_t library_version) noexcept;
+  const uint16_t server_version;
+  const uint16_t library_version;
+};
+
+// A motion ended in a reflex, was preempted (Robot::stop), or could not start. `log` holds the
+// last cycles before it.
+struct ControlException : public Exception {
+  explicit ControlException(const std::string& what, std::vector<franka::Record> log = {}) noexcept;
+  const std::vector<franka::Record> log;
+};
+
+// The robot refused a command (e.g. a setting out of its range, or a call in the wrong mode).
 struct CommandException : public Exception {
   using Exception::Exception;
 };
@@ -42,7 +55,7 @@ struct RealtimeException : public Exception {
   using Exception::Exception;
 };
 
-// The call is not allowed now, e.g. setLoad while a motion runs.
+// The call is not allowed now, e.g. a second motion while one runs.
 struct InvalidOperationException : public Exception {
   using Exception::Exception;
 };

@@ -1,18 +1,5 @@
-// franka::Record: one cycle of the log a ControlException carries.
+// libfranka 0.9's home of franka::Record and logToCSV (0.15 moved them to
+// franka/logging/robot_state_log.hpp); kept so that 0.9 programs build unchanged.
 #pragma once
 
-#include <array>
-
-#include "franka/robot_state.h"
-
-namespace franka {
-
-// libfranka's Record holds the state and the full robot command; CSP's holds the state and the
-// seven values the controller sent in that cycle (torques, positions or velocities).
-struct Record {
-  RobotState state;
-  std::array<double, 7> command{};
-  bool command_received = false;   // false: lost on the way, or not sent
-};
-
-}  // namespace franka
+#include "franka/logging/robot_state_log.hpp"

@@ -9,8 +9,10 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "csp/rt/deadline_clock.hpp"
 #include "csp/rt/emulator.hpp"
 #include "csp/rt/statistics.hpp"
 
@@ -93,12 +95,58 @@ struct MotionResult {
   TimingReport timing;
 };
 
-// Starts a motion in `mode`, calls `controller` once per received state (the period is the time
-// since the previous call: 0 first, 1 ms, more after an overrun), and steps the emulator until the
-// controller returns motion_finished, max_duration passes, or a reflex ends the motion. A
-// controller exception aborts the motion (Reflex), is reported to the observer, and is rethrown.
+// One motion as the FCI runs it, for every front end in this process: the robot publishes a state
+// each 1 ms cycle; the controller reads it and answers with one command. The rules (the FCI's):
+//  - read() before write(): each command answers the state read last (std::logic_error otherwise);
+//  - a state read and not answered before the next read lost its command: that cycle runs without
+//    one (the robot extrapolates; 20 in a row end the motion in communication_constraints_violation);
+//  - real time: an answer must be back before the next deadline; a late one is lost, and so are the
+//    cycles that passed meanwhile (DeadlineClock's rule). Lockstep: the robot waits for each answer.
+// run_motion (a callback per state) and libfranka's external control loop (franka/active_control.h:
+// readOnce/writeOnce) both run on it.
+class MotionSession {
+ public:
+  // Starts the motion in `mode`, tracked by the robot's `controller` (Emulator::start_motion). On the
+  // real-time clock, real-time scheduling first: RealtimeError under kEnforce, a warning under kIgnore.
+  MotionSession(Emulator& emulator, ControlMode mode, std::optional<ControllerMode> controller,
+                const LoopOptions& options);
+
+  // The next state to answer (state()); returns the robot time since the previous read (0 at the
+  // first). After the motion ended (done()) it returns 0 and the robot stays as it is.
+  Duration read();
+  const RobotState& state() const { return emulator_.state(); }
+  // The answer to the state read last. options.max_duration or options.stop make it the last.
+  void write(Command command);
+  // The controller failed on the state read last (it threw, or sent what libfranka refuses): the
+  // robot's command intake ends the motion in a reflex with `reason`.
+  void fail(std::string_view reason);
+  // The motion ended: its last command was received, or a reflex stopped it.
+  bool done() const { return !emulator_.in_motion(); }
+  // Whether a state was read and not yet answered.
+  bool awaiting_answer() const { return awaiting_answer_; }
+  // The outcome and the timing so far.
+  MotionResult result() const;
+
+ private:
+  void step(const std::optional<Command>& sent, bool arrived);
+
+  Emulator& emulator_;
+  const LoopOptions& options_;
+  CommandChannel channel_;
+  std::optional<DeadlineClock> clock_;   // real time only
+  TimingReport report_;
+  DurationHistogram compute_us_;
+  bool awaiting_answer_ = false;
+  bool first_read_ = true;
+  Duration last_read_time_;
+  int64_t read_ns_ = 0;   // when the state read last was handed out
+};
+
+// Runs a whole motion on a MotionSession: calls `controller` once per state until it returns
+// motion_finished, max_duration passes, or a reflex ends the motion. A controller exception aborts
+// the motion (MotionSession::fail), is reported to the observer, and is rethrown.
 MotionResult run_motion(Emulator& emulator, ControlMode mode, const Controller& controller,
-                        const LoopOptions& options);
+                        const LoopOptions& options, std::optional<ControllerMode> controller_mode = std::nullopt);
 
 // SCHED_FIFO and mlockall for the calling thread; returns what could not be had (empty: all).
 std::vector<std::string> enable_realtime_scheduling();

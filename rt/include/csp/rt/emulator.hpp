@@ -19,20 +19,46 @@
 #include <vector>
 
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/rt/errors.hpp"
 #include "csp/rt/robot_state.hpp"
 
 namespace csp::rt {
 
 inline constexpr double kDeltaT = 1e-3;   // FCI cycle [s] (libfranka kDeltaT)
 
-enum class ControlMode { kTorque, kJointPosition, kJointVelocity };
+// What a motion commands (libfranka's Robot::control overloads): joint-level torques, or one of
+// the four external motion generators.
+enum class ControlMode { kTorque, kJointPosition, kJointVelocity, kCartesianPose, kCartesianVelocity };
 const char* control_mode_name(ControlMode mode);
+bool is_cartesian(ControlMode mode);
 
-// One cycle's command as it reaches the robot: torques without gravity (torque mode), or the
-// commanded joint positions q_c / velocities dq_c of an external motion generator.
+// Which controller of the robot turns a motion generator's setpoint into torques (libfranka
+// ControllerMode, and the research interface's kExternalController): the robot's joint impedance
+// (Robot::setJointImpedance), its Cartesian impedance on the stiffness frame K
+// (Robot::setCartesianImpedance), or the user's torques (Robot::control(torque_cb, motion_cb):
+// the motion generator's setpoint is checked and published but the user's torque drives the arm).
+enum class ControllerMode { kJointImpedance, kCartesianImpedance, kExternalController };
+const char* controller_mode_name(ControllerMode mode);
+
+// One cycle's command as it reaches the robot. Which fields count depends on the motion's mode:
+//   kTorque             values: torques without gravity (tau_J_d) [N m]
+//   kJointPosition      values: commanded joint positions q_c [rad]
+//   kJointVelocity      values: commanded joint velocities dq_c [rad/s]
+//   kCartesianPose      O_T_EE_c: commanded EE pose in the base frame, 4x4 column-major; elbow
+//   kCartesianVelocity  O_dP_EE_c: commanded EE twist, base-frame axes about the EE origin,
+//                       (m/s x3, rad/s x3); elbow
+// elbow (Cartesian modes, optional as in franka::CartesianPose::hasElbow): joint 3's position
+// [rad] and the sign of joint 4 relative to kElbowFlip (+1 or -1); without it the robot keeps
+// joint 3 where its last commanded joint trajectory had it.
+// torque: the user's torque without gravity [N m] when a motion generator runs with
+// ControllerMode::kExternalController (libfranka's control(torque_cb, motion_cb)).
 struct Command {
   Vector7 values = Vector7::Zero();
   bool motion_finished = false;
+  std::array<double, 16> O_T_EE_c = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  std::array<double, 6> O_dP_EE_c{};
+  std::optional<std::array<double, 2>> elbow = std::nullopt;
+  Vector7 torque = Vector7::Zero();
 };
 
 // What reaches the robot in one cycle (the input of Emulator::step): a command; none, because it
@@ -60,6 +86,9 @@ CollisionBehavior default_collision_behavior();
 
 // Robot::setJointImpedance default of libfranka's examples [N m/rad].
 Vector7 default_joint_stiffness();
+// Robot::setCartesianImpedance default of libfranka's examples (examples_common.cpp
+// setDefaultBehavior: {3000, 3000, 3000, 300, 300, 300}) [N/m x3, N m/rad x3].
+Vector6 default_cartesian_stiffness();
 
 // A push or a contact scripted by a scenario: `force` and `moment` (base frame) act on link `link`
 // (1..7) at `point` (link frame) from `start` to `end` [s], ramped in and out over `ramp` [s].
@@ -85,6 +114,7 @@ struct EmulatorSettings {
   uint64_t seed = 1;                     // sensor noise
   CollisionBehavior collision = default_collision_behavior();
   Vector7 joint_stiffness = default_joint_stiffness();
+  Vector6 cartesian_stiffness = default_cartesian_stiffness();   // K-frame axes x y z R P Y
   std::vector<ExternalWrench> external_wrenches;
 };
 
@@ -117,7 +147,10 @@ class Emulator {
   const std::string& reflex_reason() const { return reflex_reason_; }
 
   // Motions, like the FCI: start (Idle -> Move), one step per 1 ms cycle, finish (-> Idle).
-  void start_motion(ControlMode mode);
+  // `controller` tracks a motion generator: kJointImpedance unless given; kTorque motions always
+  // use kExternalController (the user's torque), and refuse another (std::invalid_argument).
+  void start_motion(ControlMode mode, std::optional<ControllerMode> controller = std::nullopt);
+  std::optional<ControllerMode> controller_mode() const { return mode_ ? std::optional(controller_) : std::nullopt; }
   // One cycle. A lost command reuses the last torque or extrapolates the motion generator; 20 in
   // a row end the motion in a reflex. A non-finite command or a failed controller end it at once.
   void step(const CycleInput& input);
@@ -127,9 +160,15 @@ class Emulator {
   // Configuration between motions (Robot::set...); InvalidOperation during a motion.
   void set_collision_behavior(const CollisionBehavior& behavior);
   void set_joint_impedance(const Vector7& stiffness);
+  // Robot::setCartesianImpedance: K-frame stiffness, 10..3000 N/m and 1..300 N m/rad (robot.h).
+  void set_cartesian_impedance(const Vector6& stiffness);
   // What the robot is told it carries (flange frame): its model only; what the arm really
   // carries is the plant's load, set by the scenario.
   void set_load(const RigidBodyInertia& load);
+  // What the arm really carries beyond the scenario's load, e.g. the object in the hand's grasp
+  // (flange frame): changes the plant only (the robot's model learns of it only through setLoad,
+  // as on a real robot). Allowed between any two cycles, also during a motion.
+  void set_carried_object(const RigidBodyInertia& object);
   void set_EE(const Transform& NE_T_EE);
   void set_K(const Transform& EE_T_K);
   // Clears current_errors and releases the brakes (Reflex -> Idle).
@@ -151,10 +190,20 @@ class Emulator {
     Vector7 gravity;     // gravity compensation by the robot's model, g(q)
     Vector7 q_hold;      // the position Idle holds (q_d)
   };
-  // The external motion generator as the robot sees it: the commanded joint trajectory.
+  // The external motion generator as the robot sees it: the commanded joint trajectory and, in
+  // the Cartesian modes, the commanded EE pose and elbow with their rates, from which the robot's
+  // inverse kinematics makes the joint trajectory.
   struct MotionGenerator {
     Vector7 q_c, dq_c, ddq_c;
     bool first_command = true;
+    Transform O_T_EE_c;
+    Vector6 O_dP_EE_c, O_ddP_EE_c;
+    double elbow_c = 0.0, delbow_c = 0.0, ddelbow_c = 0.0;   // joint 3 [rad, rad/s, rad/s^2]
+    double elbow_sign = 1.0;                                   // of joint 4, relative to kElbowFlip
+  };
+  // What a joint-level check found out of bounds, as a motion generator's own error flags.
+  struct JointTrajectoryErrors {
+    Error position, velocity, velocity_discontinuity, acceleration_discontinuity;
   };
   // What arrived from the controller, and the robot's memory of it.
   struct CommandReception {
@@ -186,8 +235,21 @@ class Emulator {
   void publish();
 
   // Parts of the stages.
-  ErrorSet accept_torque(const Command* command);
+  ErrorSet accept_torque(const Vector7* torque);   // null: the command was lost
   ErrorSet run_motion_generator(const Command* command);
+  ErrorSet joint_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c);
+  ErrorSet cartesian_setpoint(const Command* command, Vector7& q_c, Vector7& dq_c);
+  // The robot's Cartesian impedance controller, in cartesian_motion.cpp: the desired stiffness
+  // frame K at the commanded joints and its critical damping, once per cycle; its torque at the
+  // arm's state, every substep.
+  struct CartesianImpedance {
+    Transform O_T_K_d;   // the robot's model at q_c
+    Vector6 O_dP_K_d;    // J_K(q_c) dq_c
+    Vector6 damping;     // K-frame axes
+  };
+  CartesianImpedance cartesian_impedance_target(const Vector7& q_c, const Vector7& dq_c);
+  Vector7 cartesian_impedance_torque(const CartesianImpedance& target, const Vector7& q_c, const Vector7& dq_c,
+                                     const Vector7& joint_damping);
   void gravity_compensation_torque();
   LinkWrenches external_link_wrenches(double t);
   void enter_reflex(const ErrorSet& errors, const std::string& reason);
@@ -204,8 +266,10 @@ class Emulator {
 
   // The robot's state machine
   std::optional<ControlMode> mode_;
+  ControllerMode controller_ = ControllerMode::kJointImpedance;
   Phase phase_ = Phase::kIdle;
   std::string reflex_reason_;
+  std::string motion_generator_reason_;   // why this cycle's setpoint was refused, beyond its flags
   double braking_since_ = 0.0;   // [s] when the last reflex began
 
   // The stages' state

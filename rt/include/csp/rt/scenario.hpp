@@ -10,6 +10,7 @@
 
 #include "csp/rt/control_loop.hpp"
 #include "csp/rt/emulator.hpp"
+#include "csp/rt/hand.hpp"
 
 namespace csp::rt {
 
@@ -59,10 +60,17 @@ struct Scenario {
   double duration = 10.0;   // [s], at most kMaxDuration
   Clock clock = Clock::kLockstep;
   uint64_t seed = 1;
+  HandSettings hand;                   // the Franka Hand (franka::Gripper) and what it may grasp
+  VacuumSettings vacuum_gripper;       // the Cobot Pump (franka::VacuumGripper)
 };
 
 Scenario load_scenario(const std::string& path);
 
+// Where CSP's shipped configs/ (robots/, scenarios/, scenes/) are: $CSP_CONFIG_DIR if set, else the
+// source tree's, else the installed copy (share/csp/configs).
+std::string shipped_config_dir();
+// A shipped scenario by name, e.g. "libfranka_panda" -> <configs>/scenarios/libfranka_panda.yaml.
+std::string shipped_scenario_path(const std::string& name);
 // The scenario the README's main command runs (configs/scenarios/default.yaml).
 std::string default_scenario_path();
 
