@@ -708,6 +708,25 @@ TEST(ConfigValidation, UnknownFrictionType) {
                   "sigmoid_keys_in_linear.yaml");
 }
 
+TEST(ConfigValidation, StaticFrictionValues) {
+  const std::string block = "friction.sets.gaz2019.static_friction.";
+  expect_rejected({{"breakaway: [0.245,", "breakaway: [-0.245,"}}, {block + "breakaway: expected 7 numbers from 0 to 100 N m"},
+                  "negative_breakaway.yaml");
+  expect_rejected({{"breakaway: [0.245,", "breakaway: [1e5,"}}, {block + "breakaway: expected 7 numbers from 0 to 100 N m"},
+                  "huge_breakaway.yaml");
+  expect_rejected({{"stribeck_velocity: [0.05,", "stribeck_velocity: [0.0,"}},
+                  {block + "stribeck_velocity: expected 7 positive numbers"}, "zero_stribeck_velocity.yaml");
+  expect_rejected({{"stribeck_velocity: [0.05,", "stribeck_velocity: [50.0,"}},
+                  {block + "stribeck_velocity: expected 7 positive numbers of at most 10 rad/s"}, "fast_stribeck_velocity.yaml");
+  expect_rejected({{"stribeck_velocity: [0.05", "stribeck_speed: [0.05"}}, {block + "stribeck_speed: expected no such key"},
+                  "misspelt_stribeck_velocity.yaml");
+  // What loads is what the file says.
+  ModelOptions options;
+  options.friction = "gaz2019";
+  const Vector7 breakaway = model_parameters(load_robot_config(robot_file("panda")), options).friction.breakaway;
+  EXPECT_EQ(breakaway, (Vector7() << 0.245, 0.1523, 0.1827, 0.3591, 0.2669, 0.1658, 0.2109).finished());
+}
+
 TEST(ConfigValidation, UnreadableFile) {
   const std::string missing = (temp_dir() / "no_such_robot.yaml").string();
   const std::string message = load_error_at(missing);

@@ -317,6 +317,11 @@ TEST(Seams, RealCsvSurvivesImportReplayAndExport) {
 // data:
 // - the plant's inertial parameters (gaz2019 instead of libfranka_fit): inertial_parameters;
 // - the plant's link friction (Gaz et al.'s sigmoid; the simulator has none): joint_friction;
+// - the plant's static friction (breakaway at rest, Stribeck decay, at each reversal of the
+//   excitation; the simulator has none): static_friction. gap fits the plant's sliding law
+//   (csp::stribeck_level) with a smooth sign; the sticking phases at the reversals, where the
+//   plant's friction is set-valued, no velocity law reproduces: they leave 1.8 % unexplained
+//   (measured), and with them in the data the backward check no longer keeps inertial_parameters.
 // - the emulator's torque sensor reads the motor torque held over the last integration substep
 //   while q and dq are sampled at the cycle's end: tau_J lags the motion by a fraction of a cycle
 //   (the fitted delay is 0.59, 0.44, 0.27 ms with 1, 2, 10 substeps: a property of the integrator,
@@ -332,9 +337,10 @@ TEST(Seams, EmulatedDefaultScenarioNamesWhatReallyDiffers) {
   const std::vector<std::string> causes = j.at("verdict").at("causes");
   ASSERT_GE(causes.size(), 2u) << j.at("verdict").dump();
   EXPECT_EQ(causes[0], "joint_friction");
-  EXPECT_EQ(causes[1], "inertial_parameters");
+  EXPECT_NE(std::find(causes.begin(), causes.end(), "static_friction"), causes.end()) << j.at("verdict").dump();
   for (const std::string& cause : causes) {
-    EXPECT_TRUE(cause == "joint_friction" || cause == "inertial_parameters" || cause == "time_delay")
+    EXPECT_TRUE(cause == "joint_friction" || cause == "inertial_parameters" || cause == "time_delay" ||
+                cause == "static_friction")
         << "named " << cause << ", which the emulated robot does not have";
     if (cause == "time_delay") {
       const double delay_ms = j.at("verdict").at("params").at("time_delay").at("delay_ms");
@@ -342,7 +348,7 @@ TEST(Seams, EmulatedDefaultScenarioNamesWhatReallyDiffers) {
       EXPECT_LT(delay_ms, 1.0) << "the integrator's lag is less than one cycle";
     }
   }
-  EXPECT_LT(j.at("verdict").at("unexplained_fraction").get<double>(), 0.01);
+  EXPECT_LT(j.at("verdict").at("unexplained_fraction").get<double>(), 0.025);
   std::filesystem::remove(csv);
 }
 

@@ -522,9 +522,10 @@ double friction_law(double phi1, double phi2, double phi3, double viscous, doubl
 
 double smooth_sign(double dq) { return std::tanh(dq / kSignVelocity); }
 
+// The plant's Stribeck law (dynamics/friction.hpp) with a smooth sign: measured velocities are
+// never exactly zero, where the plant's static friction is set-valued.
 double stribeck_excess(double excess, double stribeck_velocity, double dq) {
-  const double x = dq / stribeck_velocity;
-  return excess * smooth_sign(dq) * std::exp(-x * x);
+  return smooth_sign(dq) * stribeck_level(excess, stribeck_velocity, dq);
 }
 
 double position_ripple(double a, double b, double period, double q) {

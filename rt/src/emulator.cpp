@@ -474,7 +474,8 @@ LinkWrenches Emulator::external_link_wrenches(double t) {
 
 // The inner torque loop and the plant, integrated with `substeps` semi-implicit (symplectic)
 // Euler steps: velocity first, then position with the new velocity. Its energy error stays
-// bounded instead of drifting (tests/test_emulator.cpp measures it and a step response).
+// bounded instead of drifting (tests/test_emulator.cpp measures it and a step response). Static
+// friction enters implicitly on the new velocity (tests/test_friction.cpp).
 void Emulator::integrate() {
   PlantState& arm = plant_state_;
   TorqueLoop& loop = torque_loop_;
@@ -506,6 +507,7 @@ void Emulator::integrate() {
   if (cartesian) target = cartesian_impedance_target(q_target, dq_target);   // uses the mass matrix at q
 
   const double h = kDeltaT / settings_.substeps;
+  const bool static_friction = (plant_.parameters().friction.breakaway.array() > 0.0).any();
   const double alpha = lowpass_factor(settings_.torque_loop_bandwidth_hz, h);
   const Vector7 q_before = arm.q;
   for (int s = 0; s < settings_.substeps; ++s) {
@@ -517,10 +519,22 @@ void Emulator::integrate() {
     loop.tau_motor += alpha * (setpoint + loop.gravity - loop.tau_motor);
 
     // (M + armature) ddq = tau_motor - tau_friction(dq) - c - g + J^T f_ext
-    const Vector7 tau_link = loop.tau_motor - friction_torque(plant_.parameters().friction, arm.dq);
+    const FrictionModel& friction = plant_.parameters().friction;
+    const Vector7 tau_link = loop.tau_motor - friction_torque(friction, arm.dq);
     forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, f_ext);
-    arm.ddq = plant_data_.ddq;
-    arm.dq += h * arm.ddq;
+    if (static_friction) {
+      // Static friction acts on the new velocity (implicit): a joint at rest stays exactly at rest
+      // while the torque on it is below its breakaway level; its sliding level follows dq.
+      Vector7 bound;
+      for (int i = 0; i < kNumJoints; ++i)
+        bound[i] = h * stribeck_level(friction.breakaway[i], friction.stribeck_velocity[i], arm.dq[i]);
+      const Vector7 dq_next = static_friction_velocity(plant_data_.mass_matrix, arm.dq + h * plant_data_.ddq, bound);
+      arm.ddq = (dq_next - arm.dq) / h;
+      arm.dq = dq_next;
+    } else {
+      arm.ddq = plant_data_.ddq;
+      arm.dq += h * arm.ddq;
+    }
     arm.q += h * arm.dq;
   }
   // The sensor sits between rotor and link: the rotor's own inertia is not felt by it.

@@ -17,6 +17,8 @@ namespace {
 constexpr double kMaxLength = 10.0;     // [m]: link lengths, offsets, CoM distances
 constexpr double kMaxMass = 1000.0;     // [kg]
 constexpr double kMaxInertia = 1000.0;  // [kg m^2], any tensor entry
+constexpr double kMaxFrictionTorque = 100.0;    // [N m]: above any joint's torque limit
+constexpr double kMaxStribeckVelocity = 10.0;   // [rad/s]: above any joint's speed limit
 
 double length(const Field& field) {
   const double v = field.number();
@@ -104,17 +106,29 @@ CartesianLimits::Axis cartesian_axis(const Field& f) {
   return axis;
 }
 
+// Static friction on top of a sliding law: {source, breakaway: [7] N m, stribeck_velocity: [7] rad/s}.
+void static_friction(const Field& f, FrictionModel& friction) {
+  f.allow_only({"source", "breakaway", "stribeck_velocity"});
+  friction.breakaway = f["breakaway"].vector<7>();
+  if ((friction.breakaway.array() < 0.0).any() || (friction.breakaway.array() > kMaxFrictionTorque).any())
+    f["breakaway"].fail("7 numbers from 0 to 100 N m");
+  friction.stribeck_velocity = positive7(f["stribeck_velocity"]);
+  if ((friction.stribeck_velocity.array() > kMaxStribeckVelocity).any())
+    f["stribeck_velocity"].fail("7 positive numbers of at most 10 rad/s");
+}
+
 FrictionModel friction_set(const Field& f) {
   FrictionModel friction;
   const std::string type = f["type"].text();
+  if (f.has("static_friction")) static_friction(f["static_friction"], friction);
   if (type == "gaz_sigmoid") {
-    f.allow_only({"source", "type", "phi1", "phi2", "phi3"});
+    f.allow_only({"source", "type", "phi1", "phi2", "phi3", "static_friction"});
     friction.type = FrictionModel::Type::kGazSigmoid;
     friction.phi1 = f["phi1"].vector<7>();
     friction.phi2 = positive7(f["phi2"]);
     friction.phi3 = f["phi3"].vector<7>();
   } else if (type == "linear") {
-    f.allow_only({"source", "type", "viscous", "coulomb", "offset"});
+    f.allow_only({"source", "type", "viscous", "coulomb", "offset", "static_friction"});
     friction.type = FrictionModel::Type::kLinear;
     friction.viscous = f["viscous"].vector<7>();
     friction.coulomb = f["coulomb"].vector<7>();

@@ -58,8 +58,8 @@ inline constexpr double kSignVelocity = 0.005;  // [rad/s]
 double smooth_sign(double dq);
 
 // static_friction: the breakaway excess above the Coulomb level near zero velocity (Stribeck),
-// excess sgn(dq) exp(-(dq / stribeck_velocity)^2). The excess is positive: static friction is
-// never below the sliding level.
+// excess sgn(dq) exp(-(dq / stribeck_velocity)^2): the plant's law (csp::stribeck_level) with
+// smooth_sign. The excess is positive: static friction is never below the sliding level.
 double stribeck_excess(double excess, double stribeck_velocity, double dq);
 
 // position_ripple: a torque periodic in the joint's position (harmonic-drive / cogging ripple),
