@@ -1,0 +1,103 @@
+#include "csp/can/socketcan.hpp"
+
+#include <fcntl.h>
+#include <linux/can.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace csp::can {
+namespace {
+
+std::runtime_error failure(const std::string& interface, const std::string& what, int error) {
+  std::string hint;
+  if (error == EAFNOSUPPORT || error == EPROTONOSUPPORT)
+    hint = " (this kernel has no SocketCAN: load the modules can and can_raw, e.g. `modprobe can_raw`)";
+  else if (error == ENODEV)
+    hint = " (no such interface: for a virtual bus `ip link add dev " + interface + " type vcan && ip link set " + interface + " up`)";
+  else if (error == ENETDOWN)
+    hint = " (the interface is down: `ip link set " + interface + " up`)";
+  return std::runtime_error("CAN interface " + interface + ": " + what + ": " + std::strerror(error) + hint);
+}
+
+}  // namespace
+
+SocketCan::SocketCan(const std::string& interface) : interface_(interface) {
+  if (interface.empty() || interface.size() >= IFNAMSIZ)
+    throw std::runtime_error("CAN interface `" + interface + "`: a name of 1 to " + std::to_string(IFNAMSIZ - 1) + " characters expected");
+  fd_ = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+  if (fd_ < 0) throw failure(interface, "cannot open a raw CAN socket", errno);
+  const unsigned index = if_nametoindex(interface.c_str());
+  if (index == 0) {
+    const int error = errno;
+    close(fd_);
+    throw failure(interface, "not found", error);
+  }
+  sockaddr_can address{};
+  address.can_family = AF_CAN;
+  address.can_ifindex = static_cast<int>(index);
+  if (bind(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+    const int error = errno;
+    close(fd_);
+    throw failure(interface, "cannot bind", error);
+  }
+}
+
+SocketCan::~SocketCan() {
+  if (fd_ >= 0) close(fd_);
+}
+
+bool SocketCan::send(const Frame& frame) {
+  can_frame raw{};
+  raw.can_id = frame.id & CAN_SFF_MASK;
+  raw.can_dlc = frame.dlc;
+  std::memcpy(raw.data, frame.data.data(), 8);
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (write(fd_, &raw, sizeof raw) == static_cast<ssize_t>(sizeof raw)) {
+      ++counters_.sent;
+      return true;
+    }
+    if (errno != ENOBUFS && errno != EAGAIN) break;
+    // The interface's queue is full: give it a millisecond.
+    pollfd p{fd_, POLLOUT, 0};
+    const timespec wait{0, 1'000'000};
+    ppoll(&p, 1, &wait, nullptr);
+  }
+  ++counters_.send_failures;
+  return false;
+}
+
+std::optional<Frame> SocketCan::receive() {
+  can_frame raw{};
+  while (read(fd_, &raw, sizeof raw) == static_cast<ssize_t>(sizeof raw)) {
+    if ((raw.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_ERR_FLAG)) || raw.can_dlc > 8) {
+      ++counters_.skipped;
+      continue;
+    }
+    ++counters_.received;
+    Frame frame;
+    frame.id = raw.can_id & CAN_SFF_MASK;
+    frame.dlc = raw.can_dlc;
+    std::memcpy(frame.data.data(), raw.data, 8);
+    return frame;
+  }
+  return std::nullopt;
+}
+
+bool wait_readable(const std::vector<SocketCan*>& sockets, int64_t timeout_ns) {
+  std::vector<pollfd> fds;
+  for (const SocketCan* s : sockets) fds.push_back(pollfd{s->fd(), POLLIN, 0});
+  timeout_ns = std::max<int64_t>(timeout_ns, 0);
+  const timespec timeout{timeout_ns / 1'000'000'000, timeout_ns % 1'000'000'000};
+  return ppoll(fds.data(), fds.size(), &timeout, nullptr) > 0;
+}
+
+}  // namespace csp::can
