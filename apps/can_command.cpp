@@ -85,10 +85,11 @@ int run_serve(const CanArguments& args) {
       if (!joints.empty()) joints += ",";
       joints += std::to_string(j);
     }
-    std::printf("  %s (joints %s): %llu frames, %llu bits (worst-case stuffing), load at %.0f bit/s and 1 kHz: %.1f %%; "
+    std::printf("  %s (joints %s): %llu frames, %llu bits (worst-case stuffing), load at %.0f bit/s and 1 kHz: %.1f %% (%.0f bit/s of wall time); "
                 "received %llu, sent %llu, skipped %llu, send failures %llu\n",
                 i.name.c_str(), joints.c_str(), static_cast<unsigned long long>(i.load.frames()),
                 static_cast<unsigned long long>(i.load.bits()), args.bitrate, i.load_percent,
+                static_cast<double>(i.load.bits()) / r.wall_seconds,
                 static_cast<unsigned long long>(i.socket.received), static_cast<unsigned long long>(i.socket.sent),
                 static_cast<unsigned long long>(i.socket.skipped), static_cast<unsigned long long>(i.socket.send_failures));
   }

@@ -49,6 +49,7 @@ class CanSession {
   void collect_socket_counters() {
     for (std::size_t i = 0; i < sockets_.size(); ++i) report_.interfaces[i].socket = sockets_[i]->counters();
   }
+  uint64_t syncs_marked() const { return syncs_marked_; }
   uint64_t cycles() const { return bus_.counters().syncs + bus_.counters().missing_syncs; }
   bool stopped() const { return options_.stop && options_.stop->load(); }
 
@@ -71,6 +72,7 @@ class CanSession {
   void produce_sync() {
     Frame sync;
     sync.id = kSync;
+    mark_sync();
     for (std::size_t i = 0; i < sockets_.size(); ++i) send(i, sync);
     bus_.receive(sync);
     flush();
@@ -117,7 +119,17 @@ class CanSession {
     for (bool p : sync_pending_)
       if (!p) return;
     sync_pending_.assign(sync_pending_.size(), false);
+    mark_sync();
     bus_.receive(sync);
+  }
+
+  // The bus load at 1 kHz counts the traffic between the first and the last SYNC.
+  void mark_sync() {
+    for (InterfaceReport& i : report_.interfaces) {
+      if (syncs_marked_ == 0) i.bits_at_first_sync = i.load.bits();
+      i.bits_at_last_sync = i.load.bits();
+    }
+    ++syncs_marked_;
   }
 
   void send(std::size_t interface, const Frame& frame) {
@@ -140,6 +152,7 @@ class CanSession {
   std::vector<bool> sync_pending_;
   int64_t last_elapse_ns_ = monotonic_ns();
   CanServeReport report_;
+  uint64_t syncs_marked_ = 0;
 };
 
 void run_sync(CanSession& s, uint64_t cycles, const CanServeOptions& options) {
@@ -221,9 +234,10 @@ CanServeReport serve(const rt::Scenario& scenario, const CanServeOptions& option
   report.server = session.arm().server().counters();
   report.emulator = session.arm().server().emulator().counters();
   report.last_reflex = session.arm().server().emulator().reflex_reason();
-  // The load at 1 kHz: the traffic of the cycles run, as if each took one millisecond.
   for (InterfaceReport& i : report.interfaces) {
-    i.load_percent = i.load.percent(options.bitrate, static_cast<double>(std::max<uint64_t>(report.cycles, 1)) * rt::kDeltaT);
+    if (session.syncs_marked() < 2) continue;
+    const double seconds = static_cast<double>(session.syncs_marked() - 1) * rt::kDeltaT;
+    i.load_percent = 100.0 * static_cast<double>(i.bits_at_last_sync - i.bits_at_first_sync) / (options.bitrate * seconds);
     if (i.load_percent > 100.0)
       report.warnings.push_back(i.name + ": the traffic needs " + std::to_string(static_cast<int>(std::lround(i.load_percent))) +
                                 " % of a " + std::to_string(static_cast<int64_t>(options.bitrate)) +

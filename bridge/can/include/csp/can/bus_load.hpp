@@ -21,10 +21,6 @@ class BusLoad {
   }
   uint64_t frames() const { return frames_; }
   uint64_t bits() const { return bits_; }
-  // Load at `bitrate` [bit/s] if the counted traffic took `seconds`: 100 = the bus is full.
-  double percent(double bitrate, double seconds) const {
-    return seconds > 0.0 ? 100.0 * static_cast<double>(bits_) / (bitrate * seconds) : 0.0;
-  }
 
  private:
   uint64_t frames_ = 0, bits_ = 0;

@@ -39,7 +39,10 @@ struct InterfaceReport {
   std::vector<int> joints;           // 1..7
   SocketCounters socket;
   BusLoad load;                      // every frame on the interface, both directions
-  double load_percent = 0.0;         // at options.bitrate, if the cycles ran at 1 kHz
+  // The traffic from the first to the last SYNC at options.bitrate, as if each cycle took 1 ms
+  // (what a real bus would carry at 1 kHz); 0 with fewer than two SYNCs.
+  double load_percent = 0.0;
+  uint64_t bits_at_first_sync = 0, bits_at_last_sync = 0;
 };
 
 struct CanServeReport {
