@@ -244,7 +244,9 @@ def session(csp, reference, work):
     check(codes == {(n, 0x8250) for n in NODES}, "EMCY 0x8250 (RPDO timeout = communication_constraints_violation) from every node: %s" % sorted(codes))
     check(all(node_reg & 0x11 == 0x11 for _, _, node_reg, _ in master.emcy), "EMCY error register: generic + communication")
     tpdos = master.cycle([])
-    check(all(s & 0x4F == 0x08 for s in statuswords(tpdos)), "every drive in 402 fault (statusword & 0x4F = 0x08)")
+    check(all(s & 0x4F == 0x0F for s in statuswords(tpdos)), "every drive in 402 fault reaction active (statusword & 0x4F = 0x0F)")
+    tpdos = master.cycle([])
+    check(all(s & 0x4F == 0x08 for s in statuswords(tpdos)), "then in 402 fault (statusword & 0x4F = 0x08)")
     check(master.upload(4, 0x2002, 32) == b"\x01", "0x2002 sub 32 (communication_constraints_violation) = 1")
     # Fault reset: rising edge of controlword bit 7 -> automatic error recovery -> switch on disabled.
     master.emcy.clear()
@@ -265,10 +267,123 @@ def session(csp, reference, work):
     check(replay.returncode == 0 and "bit for bit" in replay.stdout, "csp replay re-simulates the CAN session log bit for bit")
 
 
+def badinput(csp, work):
+    # The flood's COB-ID 0x3FF (TPDO3 of node 127: no node of CSP's) is filtered out here, so
+    # that this master keeps up while CSP reads the 1e5 frames.
+    master = Master()
+    master.bus.set_filters([{"can_id": base, "can_mask": 0x780} for base in (0x080, 0x180, 0x280, 0x580, 0x700)])
+    log = os.path.join(work, "badinput.lcmlog")
+    serve = boot(master, csp, work, "badinput", "--log", log)
+    master.send(0x000, [0x01, 0x00])
+
+    master.emcy.clear()
+    master.send(0x202, [0x0F])                                # RPDO1 of node 2 with 1 byte of its 4
+    master.wait_for(lambda m: m.arbitration_id == 0x082, timeout=2)
+    check((2, 0x8210) in [(n, c) for n, c, _, _ in master.emcy], "RPDO shorter than its mapping: EMCY 0x8210 (PDO length)")
+    master.send(0x3FF, b"\x01\x02")                            # unknown COB-IDs: ignored, no answer
+    master.send(0x6FF, bytes(8))
+    check(master.wait_for(lambda m: m.arbitration_id == 0x5FF, timeout=0.3) is None, "SDO to a node that is not there: no answer")
+
+    def abort_code(node, command, index, sub, value):
+        try:
+            master._sdo_request(node, struct.pack("<BHB", command, index, sub) + value)
+            return None
+        except SdoAbort as e:
+            return e.code
+    check(abort_code(1, 0x2F, 0x6060, 0, bytes([3, 0, 0, 0])) in (0x06090030, 0x06090031, 0x06090032), "0x6060 = 3 (no such mode): abort 0x0609003x")
+    check(abort_code(1, 0x2B, 0x6072, 0, struct.pack("<H", 60000) + bytes(2)) == 0x06090031, "0x6072 max torque beyond tau_max: abort 0x06090031")
+    check(abort_code(1, 0x23, 0x1000, 0, bytes(4)) == 0x06010002, "write to the const 0x1000: abort 0x06010002")
+    check(abort_code(1, 0x23, 0x6040, 0, bytes(4)) == 0x06070012, "4 bytes to the U16 controlword: abort 0x06070012")
+
+    # An out-of-range target torque: limited to 0x6072, a jump all the same -> the robot's reflex.
+    for controlword in (0x06, 0x07, 0x0F, 0x0F):
+        master.cycle(rpdo1(controlword))
+    master.emcy.clear()
+    master.cycle(rpdo1(0x0F, [0x7FFF, 0, 0, 0, 0, 0, 0]))
+    master.wait_for(lambda m: False, timeout=0.3)
+    check({(n, c) for n, c, _, _ in master.emcy} >= {(n, 0xFF1E) for n in NODES},
+          "target torque 0x7FFF: limited, still a jump: EMCY 0xFF1E controller_torque_discontinuity from every node")
+    master.cycle(rpdo1(0x00))
+    tpdos = master.cycle(rpdo1(0x80))
+    tpdos = master.cycle(rpdo1(0x00))
+    check(all(s & 0x4F == 0x40 for s in statuswords(tpdos)), "fault reset after the reflex -> switch on disabled")
+
+    # A flood of 1e5 frames while the arm is in a CST motion: every cycle is answered, none lost.
+    for controlword in (0x06, 0x07, 0x0F):
+        master.cycle(rpdo1(controlword))
+    flood = subprocess.Popen(["cangen", "vcan0", "-I", "3FF", "-L", "8", "-D", "i", "-g", "0", "-n", "100000"])
+    flood_cycles = 0
+    while flood.poll() is None:
+        tpdos = master.cycle(rpdo1(0x0F))
+        flood_cycles += 1
+    for _ in range(20):
+        tpdos = master.cycle(rpdo1(0x0F))
+    check(flood.returncode == 0, "cangen sent 1e5 frames on COB-ID 0x3FF")
+    check(all(s & 0x6F == 0x27 for s in statuswords(tpdos)), "after the flood (%d cycles during it): still operation enabled" % flood_cycles)
+    text = stop_serve(serve, work, "badinput")
+    lost = int(text.split("lost commands ")[1].split()[0])
+    ignored = int(text.split("ignored frames ")[1].split(",")[0])
+    check(lost == 0, "no command lost during the flood (lost commands %d)" % lost)
+    check(ignored >= 10000, "CSP ignored %d of the flood's frames (the rest overflowed its socket's queue)" % ignored)
+    replay = subprocess.run([csp, "replay", log], capture_output=True, text=True)
+    print(replay.stdout + replay.stderr, flush=True)
+    check(replay.returncode == 0 and "bit for bit" in replay.stdout, "the log of the bad-input session is complete: csp replay bit for bit")
+
+
+def busload(work):
+    """canbusload's worst-case figures (summed over its 1 s lines) vs csp can serve's own count."""
+    frames = bits = 0
+    for line in open(os.path.join(work, "busload.txt")):
+        fields = line.split()
+        if fields and fields[0] == "vcan0@1000000":
+            frames += int(fields[1])
+            bits += int(fields[2])
+    text = open(os.path.join(work, "session.out")).read()
+    csp = text.split("vcan0 (joints 1,2,3,4,5,6,7): ")[1]
+    csp_frames, csp_bits = int(csp.split(" frames")[0]), int(csp.split("frames, ")[1].split(" bits")[0])
+    check(frames > 10000 and (frames, bits) == (csp_frames, csp_bits),
+          "canbusload: %d frames, %d bits; csp can serve: %d frames, %d bits (worst-case stuffing)" % (frames, bits, csp_frames, csp_bits))
+
+
+def replay_compare(work):
+    """The TPDOs of a canplayer replay of the master's frames equal those of the session."""
+    def tpdos(path):
+        out = []
+        for line in open(os.path.join(work, path)):
+            frame = line.split()[2]
+            if frame[:3] in ("181", "182", "183", "184", "185", "186", "187", "281", "282", "283", "284", "285", "286", "287"):
+                out.append(frame)
+        return out
+    original, replayed = tpdos("session.candump"), tpdos("replay.candump")
+    check(len(replayed) >= 14 * 90 and replayed == original[:len(replayed)],
+          "candump -L -> canplayer -> the same TPDO stream (%d TPDOs)" % len(replayed))
+
+
+def master_frames(work, syncs):
+    """The master's frames of the session (NMT, SYNC, RPDOs, SDO requests) up to its n-th SYNC."""
+    with open(os.path.join(work, "session.candump")) as f, open(os.path.join(work, "master.candump"), "w") as out:
+        count = 0
+        for line in f:
+            cob = int(line.split()[2].split("#")[0], 16)
+            if cob in (0x000, 0x080) or 0x200 <= cob < 0x580 or 0x600 <= cob < 0x680:
+                out.write(line)
+                count += cob == 0x080
+                if count == syncs:
+                    break
+
+
 def main():
     command = sys.argv[1]
     if command == "session":
         session(*sys.argv[2:5])
+    elif command == "badinput":
+        badinput(*sys.argv[2:4])
+    elif command == "busload":
+        busload(sys.argv[2])
+    elif command == "master-frames":
+        master_frames(sys.argv[2], int(sys.argv[3]))
+    elif command == "replay-compare":
+        replay_compare(sys.argv[2])
     else:
         raise SystemExit("unknown command " + command)
     if failures:

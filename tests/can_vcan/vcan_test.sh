@@ -11,13 +11,41 @@ for tool in candump canplayer canbusload cangen; do
 done
 $PY -c "import can" || { echo "FAIL  python3-can missing: apt-get install python3-can"; exit 1; }
 
+M="$CSP_TESTS/master.py"
+W="$CSP_WORK"
+
 part "independent master (python-can): boot, SDO, 402, 1000 CST cycles vs the in-process emulator, RPDO silence, replay"
-candump -L vcan0 > "$CSP_WORK/session.candump" &
+candump -L vcan0 > "$W/session.candump" &
+dump=$!
+canbusload vcan0@1000000 > "$W/busload.txt" &
+load=$!
+sleep 0.5
+$PY "$M" session "$CSP_BIN" "$CSP_REFERENCE" "$W" || fail "session"
+sleep 2   # canbusload prints once a second: let it print the last traffic
+kill $dump $load
+
+part "canbusload vcan0@1000000 vs csp can serve's own figure"
+$PY "$M" busload "$W" || fail "busload"
+
+part "candump -L log -> canplayer -> the same TPDO stream"
+$PY "$M" master-frames "$W" 100
+candump -L vcan0 > "$W/replay.candump" &
 dump=$!
 sleep 0.3
-$PY "$CSP_TESTS/master.py" session "$CSP_BIN" "$CSP_REFERENCE" "$CSP_WORK" || fail "session"
-sleep 0.3
+"$CSP_BIN" can serve --iface vcan0 --duration 1000 > "$W/replay.out" 2>&1 &
+serve=$!
+for i in $(seq 600); do grep -q "707#00" "$W/replay.candump" && break; sleep 0.1; done
+canplayer -I "$W/master.candump" || fail "canplayer"
+sleep 1
+kill -INT $serve; wait $serve
 kill $dump
+$PY "$M" replay-compare "$W" || fail "replay"
+
+part "bad input on the live bus: wrong DLC, unknown COB-IDs, SDO errors, out-of-range target, 1e5 frames"
+$PY "$M" badinput "$CSP_BIN" "$W" || fail "bad input"
+
+part "interop: the unmodified python-canopen (BaseNode402) maps PDOs by SDO, enables, moves in CSP and CST"
+$PY "$CSP_TESTS/canopen_interop.py" "$CSP_BIN" "$CSP_VENDOR" "$W" || fail "python-canopen"
 
 echo "=== $failed part(s) failed"
 exit $failed

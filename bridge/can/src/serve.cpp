@@ -18,6 +18,7 @@ using rt::monotonic_ns;
 // runs without them (lost), and the pace while no joint is enabled.
 constexpr int64_t kLockstepTimeoutNs = 100'000'000;
 constexpr int64_t kIdleSyncNs = 1'000'000;
+constexpr int64_t kIdleAfterNs = 100'000'000;
 
 // One serve run: the sockets, the drives, the robot, the bus-load counters.
 class CanSession {
@@ -75,6 +76,7 @@ class CanSession {
     mark_sync();
     for (std::size_t i = 0; i < sockets_.size(); ++i) send(i, sync);
     bus_.receive(sync);
+    robot_time_cycle();
     flush();
   }
 
@@ -90,12 +92,14 @@ class CanSession {
     if (!all_pending) wait_readable(socket_list_, timeout_ns);
   }
 
-  // Heartbeat time from the wall clock.
+  // Sync clock: heartbeat time is robot time (1 ms per cycle) while cycles run, and wall time
+  // while none has run for kIdleAfterNs (a master that has not started, or has stopped, SYNC).
   void elapse() {
     const int64_t now = monotonic_ns();
     const int64_t us = (now - last_elapse_ns_) / 1000;
     if (us <= 0) return;
     last_elapse_ns_ += us * 1000;
+    if (now - last_cycle_ns_ < kIdleAfterNs) return;
     bus_.elapse(static_cast<uint32_t>(std::min<int64_t>(us, 1'000'000)));
     flush();
   }
@@ -121,6 +125,12 @@ class CanSession {
     sync_pending_.assign(sync_pending_.size(), false);
     mark_sync();
     bus_.receive(sync);
+    robot_time_cycle();
+  }
+
+  void robot_time_cycle() {
+    last_cycle_ns_ = monotonic_ns();
+    if (options_.clock == rt::Clock::kLockstep) bus_.elapse(1000);
   }
 
   // The bus load at 1 kHz counts the traffic between the first and the last SYNC.
@@ -151,6 +161,7 @@ class CanSession {
   std::array<int, 128> interface_of_node_{};
   std::vector<bool> sync_pending_;
   int64_t last_elapse_ns_ = monotonic_ns();
+  int64_t last_cycle_ns_ = 0;
   CanServeReport report_;
   uint64_t syncs_marked_ = 0;
 };

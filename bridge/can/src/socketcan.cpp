@@ -41,6 +41,11 @@ SocketCan::SocketCan(const std::string& interface) : interface_(interface) {
     close(fd_);
     throw failure(interface, "not found", error);
   }
+  // A deep receive queue: a burst of frames (a master's start-up, a flood) waits instead of
+  // being dropped (SO_RCVBUFFORCE needs CAP_NET_ADMIN; without it the system's maximum applies).
+  const int queue_bytes = 8 << 20;
+  if (setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &queue_bytes, sizeof queue_bytes) != 0)
+    setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &queue_bytes, sizeof queue_bytes);
   sockaddr_can address{};
   address.can_family = AF_CAN;
   address.can_ifindex = static_cast<int>(index);
