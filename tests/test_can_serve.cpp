@@ -183,7 +183,7 @@ TEST_F(CanServe, CspFollowsTheTargetPositionLikeTheInProcessJointPositionMode) {
   std::array<int32_t, 7> start{};
   for (int n = 1; n <= 7; ++n) {
     bus.receive(frame(kRpdo4 + n, {kModeCsp}));
-    start[n - 1] = static_cast<int32_t>(std::lround(emulator().state().q[n - 1] * 1e6));
+    start[n - 1] = static_cast<int32_t>(bus.node(n - 1).value(0x6062, 0));   // q_d, where the motion starts
     rpdo2(n, start[n - 1]);
   }
   for (uint16_t cw : {0x06, 0x07}) controlword_all(cw);

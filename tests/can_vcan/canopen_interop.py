@@ -71,7 +71,8 @@ def main(csp, vendor, work):
         node.setup_402_state_machine(read_pdos=True)
     check(all(n.rpdo[1].length == 64 for n in nodes), "RPDO1 remapped by SDO: controlword + target position + target torque (8 bytes)")
 
-    # The master's cycle thread: every RPDO1, then SYNC; `on_cycle` sets the targets.
+    # The master's cycle thread: every RPDO1, then SYNC, then wait for the TPDOs; `on_cycle` sets
+    # the targets.
     stop = threading.Event()
     on_cycle = [lambda k: None]
     cycles = [0]
@@ -79,11 +80,16 @@ def main(csp, vendor, work):
     def cycle_thread():
         while not stop.is_set():
             on_cycle[0](cycles[0])
+            last = nodes[6].tpdo[2]          # the last TPDO the drives send after a SYNC
+            answered = last.timestamp
             for node in nodes:
                 node.rpdo[1].transmit()
             network.sync.transmit()
+            # Lockstep: the next cycle once the drives answered this SYNC.
+            deadline = time.monotonic() + 10
+            while last.timestamp == answered and time.monotonic() < deadline:
+                time.sleep(0.0005)
             cycles[0] += 1
-            time.sleep(0.004)
 
     network.nmt.state = "OPERATIONAL"
     thread = threading.Thread(target=cycle_thread)
@@ -100,8 +106,9 @@ def main(csp, vendor, work):
 
     try:
         wait_cycles(3)
-        # CSP: the targets start where the arm is.
-        start = [position(node) for node in nodes]
+        # CSP: the targets start at the robot's desired position 0x6062 (q_d), where libfranka's
+        # motion generators start (the measured q may differ while the robot holds it).
+        start = [node.sdo[0x6062].raw for node in nodes]
         for node, q in zip(nodes, start):
             node.rpdo[1]["Target position"].raw = q
             node.op_mode = "CYCLIC SYNCHRONOUS POSITION"

@@ -26,6 +26,9 @@ M=/usr/lib/uml/modules/$(uname -r)/kernel
   done
   for i in vcan0 vcan1; do ip link add dev $i type vcan && ip link set $i up || { echo "init: cannot create $i"; exit 124; }; done
   ip link set lo up
+  # Deep receive queues for every socket (candump, canbusload, the masters): a tool the
+  # single-CPU guest does not schedule for a while must not drop frames.
+  echo 8388608 > /proc/sys/net/core/rmem_max; echo 8388608 > /proc/sys/net/core/rmem_default
   cd "$CSP_CWD" && sh "$CSP_SCRIPT"
 ) > "$CSP_WORK/out" 2>&1
 echo $? > "$CSP_WORK/rc"

@@ -47,5 +47,16 @@ $PY "$M" badinput "$CSP_BIN" "$W" || fail "bad input"
 part "interop: the unmodified python-canopen (BaseNode402) maps PDOs by SDO, enables, moves in CSP and CST"
 $PY "$CSP_TESTS/canopen_interop.py" "$CSP_BIN" "$CSP_VENDOR" "$W" || fail "python-canopen"
 
+part "examples: csp_can_joint_impedance (csp::can::Master) and can_joint_impedance.py (python-can)"
+for example in "$CSP_CAN_EXAMPLE --timeout 10" "$PY $CSP_EXAMPLES/can_joint_impedance.py --timeout 10"; do
+  "$CSP_BIN" can serve --iface vcan0 --duration 1000 > "$W/example.out" 2>&1 &
+  serve=$!
+  sleep 2
+  $example --iface vcan0 --cycles 300 || fail "$example"
+  kill -INT $serve; wait $serve
+  cat "$W/example.out"
+  grep -q "motions 1, motion cycles 30[0-9], lost commands 0" "$W/example.out" || fail "$example: one motion of 300 cycles, none lost"
+done
+
 echo "=== $failed part(s) failed"
 exit $failed

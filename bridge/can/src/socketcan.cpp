@@ -7,6 +7,7 @@
 #include <poll.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -81,25 +82,43 @@ bool SocketCan::send(const Frame& frame) {
 }
 
 std::optional<Frame> SocketCan::receive() {
-  can_frame raw{};
-  while (read(fd_, &raw, sizeof raw) == static_cast<ssize_t>(sizeof raw)) {
-    if ((raw.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_ERR_FLAG)) || raw.can_dlc > 8) {
-      ++counters_.skipped;
-      continue;
+  while (next_ == batch_.size()) {
+    can_frame raw[kBatch];
+    iovec io[kBatch];
+    mmsghdr messages[kBatch];
+    for (int i = 0; i < kBatch; ++i) {
+      io[i] = iovec{&raw[i], sizeof raw[i]};
+      messages[i] = mmsghdr{};
+      messages[i].msg_hdr.msg_iov = &io[i];
+      messages[i].msg_hdr.msg_iovlen = 1;
     }
-    ++counters_.received;
-    Frame frame;
-    frame.id = raw.can_id & CAN_SFF_MASK;
-    frame.dlc = raw.can_dlc;
-    std::memcpy(frame.data.data(), raw.data, 8);
-    return frame;
+    const int n = recvmmsg(fd_, messages, kBatch, MSG_DONTWAIT, nullptr);
+    if (n <= 0) return std::nullopt;
+    batch_.clear();
+    next_ = 0;
+    for (int i = 0; i < n; ++i) {
+      const can_frame& r = raw[i];
+      if (messages[i].msg_len != sizeof r || (r.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_ERR_FLAG)) || r.can_dlc > 8) {
+        ++counters_.skipped;
+        continue;
+      }
+      Frame frame;
+      frame.id = r.can_id & CAN_SFF_MASK;
+      frame.dlc = r.can_dlc;
+      std::memcpy(frame.data.data(), r.data, 8);
+      batch_.push_back(frame);
+    }
   }
-  return std::nullopt;
+  ++counters_.received;
+  return batch_[next_++];
 }
 
 bool wait_readable(const std::vector<SocketCan*>& sockets, int64_t timeout_ns) {
   std::vector<pollfd> fds;
-  for (const SocketCan* s : sockets) fds.push_back(pollfd{s->fd(), POLLIN, 0});
+  for (const SocketCan* s : sockets) {
+    if (s->pending()) return true;
+    fds.push_back(pollfd{s->fd(), POLLIN, 0});
+  }
   timeout_ns = std::max<int64_t>(timeout_ns, 0);
   const timespec timeout{timeout_ns / 1'000'000'000, timeout_ns % 1'000'000'000};
   return ppoll(fds.data(), fds.size(), &timeout, nullptr) > 0;

@@ -31,14 +31,21 @@ class SocketCan {
   int fd() const { return fd_; }
   // Sends one frame; a full queue is waited for up to 1 ms, then the frame counts as a failure.
   bool send(const Frame& frame);
-  // The next classic data frame waiting, or nothing (never blocks).
+  // The next classic data frame waiting, or nothing (never blocks). Frames are read from the
+  // kernel in batches (recvmmsg): one system call for a burst.
   std::optional<Frame> receive();
+  // Frames already read from the kernel and not handed out yet.
+  bool pending() const { return next_ < batch_.size(); }
   const SocketCounters& counters() const { return counters_; }
 
  private:
+  static constexpr int kBatch = 64;
+
   std::string interface_;
   int fd_ = -1;
   SocketCounters counters_;
+  std::vector<Frame> batch_;   // read, not yet handed out
+  std::size_t next_ = 0;
 };
 
 // Waits up to `timeout_ns` until one of the sockets has a frame; returns whether one has.
