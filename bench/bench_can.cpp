@@ -73,12 +73,14 @@ void BM_CstCycle7Joints(benchmark::State& state) {
   set_cycle_counters(state);
 }
 
-// The master's torque: damping on the measured velocity, so that the arm stays well inside its
-// limits however many cycles the benchmark runs.
-template <typename Velocity>
-std::array<int16_t, kJoints> damping(const Velocity& dq) {
+// The master's torque: a joint impedance holding the start pose (libfranka's example gains), so
+// that the arm stays well inside its limits however many cycles the benchmark runs.
+template <typename State>
+std::array<int16_t, kJoints> hold(const State& start, const State& now) {
+  constexpr double K[kJoints] = {600, 600, 600, 600, 250, 150, 50}, D[kJoints] = {50, 50, 50, 20, 20, 20, 10};
   std::array<int16_t, kJoints> raw{};
-  for (int j = 0; j < kJoints; ++j) raw[j] = static_cast<int16_t>(std::lround(-2.0 * dq[j] / (j < 4 ? 3e-3 : 0.5e-3)));
+  for (int j = 0; j < kJoints; ++j)
+    raw[j] = static_cast<int16_t>(std::lround((K[j] * (start.q[j] - now.q[j]) - D[j] * now.dq[j]) / (j < 4 ? 3e-3 : 0.5e-3)));
   return raw;
 }
 
@@ -86,9 +88,10 @@ void BM_CstCycleThroughRobotServer(benchmark::State& state) {
   ServerArm arm(rt::load_scenario(rt::default_scenario_path()), "", [](const std::string&) {});
   InMemoryMaster master(arm);
   const rt::Emulator& emulator = arm.server().emulator();
+  const rt::RobotState start = emulator.state();
   for (auto _ : state) {
     master.bus.clear_sent();
-    master.cycle(0x0F, damping(emulator.state().dq));
+    master.cycle(0x0F, hold(start, emulator.state()));
   }
   if (!emulator.in_motion()) state.SkipWithError(("the motion ended: " + emulator.reflex_reason()).c_str());
   set_cycle_counters(state);
@@ -98,8 +101,9 @@ void BM_EmulatorStepAlone(benchmark::State& state) {
   rt::Emulator emulator(rt::load_scenario(rt::default_scenario_path()).emulator);
   emulator.start_motion(rt::ControlMode::kTorque);
   rt::Command command;
+  const rt::RobotState start = emulator.state();
   for (auto _ : state) {
-    const auto raw = damping(emulator.state().dq);
+    const auto raw = hold(start, emulator.state());
     for (int j = 0; j < kJoints; ++j) command.values[j] = raw[j] * (j < 4 ? 3e-3 : 0.5e-3);
     emulator.step(&command);
   }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "csp/bridge/replay.hpp"
+#include "csp/can/serve.hpp"
 #include "csp/can/server_arm.hpp"
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/dynamics/arrays.hpp"
@@ -181,15 +182,14 @@ TEST_F(CanServe, ATorqueJumpIsControllerTorqueDiscontinuityOnEveryJoint) {
 TEST_F(CanServe, CspFollowsTheTargetPositionLikeTheInProcessJointPositionMode) {
   bus.receive(frame(kNmt, {0x01, 0x00}));
   std::array<int32_t, 7> start{};
-  for (int n = 1; n <= 7; ++n) {
-    bus.receive(frame(kRpdo4 + n, {kModeCsp}));
-    start[n - 1] = static_cast<int32_t>(bus.node(n - 1).value(0x6062, 0));   // q_d, where the motion starts
-    rpdo2(n, start[n - 1]);
-  }
+  for (int n = 1; n <= 7; ++n) bus.receive(frame(kRpdo4 + n, {kModeCsp}));
   for (uint16_t cw : {0x06, 0x07}) controlword_all(cw);
   const std::size_t idle_cycles = arm.q.size();
-  // Enable and the first targets in the same cycle: the start pose, quantized to 1 urad.
-  for (int n = 1; n <= 7; ++n) rpdo2(n, start[n - 1]);
+  // Enable and the first targets in the same cycle: the start pose q_d (0x6062), in 1 urad steps.
+  for (int n = 1; n <= 7; ++n) {
+    start[n - 1] = static_cast<int32_t>(bus.node(n - 1).value(0x6062, 0));
+    rpdo2(n, start[n - 1]);
+  }
   controlword_all(0x0F);
   ASSERT_TRUE(emulator().in_motion());
   EXPECT_EQ(*arm.arm.server().session(), rt::ControlMode::kJointPosition);
@@ -284,6 +284,28 @@ TEST_F(CanServe, WithTheRobotsGravityCompensationTheSameTorqueIsAJump) {
     sync();
   }
   EXPECT_TRUE(emulator().state().current_errors.controller_torque_discontinuity());
+}
+
+TEST(CanBusLoad, FrameLengthsAreCanbusloadsWorstCase) {
+  // can-utils canbusload (default: worst-case stuffing), measured on vcan in the notes: an 11-bit
+  // frame of 0 / 4 / 8 data bytes counts 55 / 95 / 135 bits.
+  EXPECT_EQ(frame_bits(0), 55u);
+  EXPECT_EQ(frame_bits(4), 95u);
+  EXPECT_EQ(frame_bits(8), 135u);
+  // One default CST cycle of the seven drives on one bus: SYNC, 7 RPDO1 (4 B), 7 TPDO1 (8 B),
+  // 7 TPDO2 (7 B) = 2540 bits: 254 % of 1 Mbit/s at 1 kHz (the notes' table, worst case).
+  EXPECT_EQ(frame_bits(0) + 7 * (frame_bits(4) + frame_bits(8) + frame_bits(7)), 2540u);
+}
+
+TEST(CanSplit, JointsSpreadOverNumberedInterfacesInBlocks) {
+  EXPECT_EQ(split_interfaces("vcan0", 1), std::vector<std::string>{"vcan0"});
+  EXPECT_EQ(split_interfaces("vcan2", 3), (std::vector<std::string>{"vcan2", "vcan3", "vcan4"}));
+  EXPECT_THROW(split_interfaces("can", 2), std::invalid_argument);
+  EXPECT_THROW(split_interfaces("vcan0", 8), std::invalid_argument);
+  std::vector<int> per_interface(4);
+  for (int j = 0; j < 7; ++j) ++per_interface[interface_of_joint(j, 4)];
+  EXPECT_EQ(per_interface, (std::vector<int>{2, 2, 2, 1}));   // 4 buses: at most 2 joints, 63-77 % each at 1 Mbit/s
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(interface_of_joint(j, 1), 0);
 }
 
 }  // namespace

@@ -367,11 +367,31 @@ def master_frames(work, syncs):
         count = 0
         for line in f:
             cob = int(line.split()[2].split("#")[0], 16)
-            if cob in (0x000, 0x080) or 0x200 <= cob < 0x580 or 0x600 <= cob < 0x680:
+            if cob in (0x000, 0x080) or cob & 0x780 in (0x200, 0x300, 0x400, 0x500, 0x600):   # NMT, SYNC, RPDO1-4, SDO requests
                 out.write(line)
                 count += cob == 0x080
                 if count == syncs:
                     break
+
+
+def split(work):
+    """With --split 4 each node's frames are on its own bus: joints 1-2 vcan0, 3-4 vcan1, 5-6 vcan2, 7 vcan3."""
+    bus_of_node = {1: "vcan0", 2: "vcan0", 3: "vcan1", 4: "vcan1", 5: "vcan2", 6: "vcan2", 7: "vcan3"}
+    wrong, tpdos, syncs = [], 0, {}
+    for line in open(os.path.join(work, "split.candump")):
+        _, iface, frame = line.split()
+        cob = int(frame.split("#")[0], 16)
+        if cob == 0x080:
+            syncs[iface] = syncs.get(iface, 0) + 1
+        elif cob & 0x7F in bus_of_node and cob & 0x780 in (0x180, 0x280, 0x700):
+            tpdos += cob & 0x780 != 0x700
+            if bus_of_node[cob & 0x7F] != iface:
+                wrong.append(line.strip())
+    check(not wrong and tpdos > 100, "every node's TPDOs and heartbeats on its own bus (%d TPDOs; misplaced: %s)" % (tpdos, wrong[:3]))
+    check(len(set(syncs.values())) == 1 and sorted(syncs) == ["vcan0", "vcan1", "vcan2", "vcan3"], "CSP's SYNC on all four buses: %s" % syncs)
+    text = open(os.path.join(work, "split.out")).read()
+    loads = [float(part.split(" %")[0]) for part in text.split("1 kHz: ")[1:]]
+    check(len(loads) == 4 and all(0 < load < 100 for load in loads), "load per bus at 1 Mbit/s under 100 %%: %s" % loads)
 
 
 def main():
@@ -384,6 +404,8 @@ def main():
         busload(sys.argv[2])
     elif command == "master-frames":
         master_frames(sys.argv[2], int(sys.argv[3]))
+    elif command == "split":
+        split(sys.argv[2])
     elif command == "replay-compare":
         replay_compare(sys.argv[2])
     else:

@@ -1,7 +1,7 @@
 #!/bin/sh
 # Runs a test script inside Debian's user-mode-linux (a real Linux kernel with vcan; the host's
 # kernel has no AF_CAN): one boot, the host's / as the root file system (hostfs), modules can,
-# can_raw, can_bcm, vcan loaded, vcan0 and vcan1 up. The script's exit code is ours.
+# can_raw, can_bcm, vcan loaded, vcan0 to vcan3 up. The script's exit code is ours.
 # Usage: run_in_uml.sh WORK_DIR SCRIPT [NAME=value ...]   (the names become the script's environment)
 # Fails (never skips) when user-mode-linux, kmod or the kernel modules are missing.
 set -u
@@ -24,7 +24,7 @@ M=/usr/lib/uml/modules/$(uname -r)/kernel
   for m in net/can/can net/can/can-raw net/can/can-bcm drivers/net/can/dev/can-dev drivers/net/can/vcan; do
     insmod $M/$m.ko || { echo "init: cannot load $m"; exit 124; }
   done
-  for i in vcan0 vcan1; do ip link add dev $i type vcan && ip link set $i up || { echo "init: cannot create $i"; exit 124; }; done
+  for i in vcan0 vcan1 vcan2 vcan3; do ip link add dev $i type vcan && ip link set $i up || { echo "init: cannot create $i"; exit 124; }; done
   ip link set lo up
   # Deep receive queues for every socket (candump, canbusload, the masters): a tool the
   # single-CPU guest does not schedule for a while must not drop frames.

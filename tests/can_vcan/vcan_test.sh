@@ -1,4 +1,4 @@
-# The vcan test, inside user-mode-linux (run_in_uml.sh): vcan0 and vcan1 are up. Every part runs
+# The vcan test, inside user-mode-linux (run_in_uml.sh): vcan0 to vcan3 are up. Every part runs
 # even if an earlier one failed; the exit code counts the failed parts. Environment: CSP_BIN
 # (csp), CSP_REFERENCE (csp_can_reference), CSP_TESTS (this folder), CSP_VENDOR (shared/vendor),
 # CSP_WORK (scratch folder on the host's disk).
@@ -46,6 +46,20 @@ $PY "$M" badinput "$CSP_BIN" "$W" || fail "bad input"
 
 part "interop: the unmodified python-canopen (BaseNode402) maps PDOs by SDO, enables, moves in CSP and CST"
 $PY "$CSP_TESTS/canopen_interop.py" "$CSP_BIN" "$CSP_VENDOR" "$W" || fail "python-canopen"
+
+part "--split 4: the joints over vcan0..vcan3, each bus with its own nodes, its load under 100 %"
+candump -L any > "$W/split.candump" &
+dump=$!
+sleep 0.3
+"$CSP_BIN" can serve --iface vcan0 --split 4 --sync-producer --duration 0.3 > "$W/split.out" 2>&1 &
+serve=$!
+for i in $(seq 600); do grep -q "vcan3 707#00" "$W/split.candump" && break; sleep 0.1; done
+for i in 0 1 2 3; do cansend vcan$i 000#0100; done
+wait $serve || fail "split: csp can serve"
+sleep 0.3
+kill $dump
+cat "$W/split.out"
+$PY "$M" split "$W" || fail "split"
 
 part "examples: csp_can_joint_impedance (csp::can::Master) and can_joint_impedance.py (python-can)"
 for example in "$CSP_CAN_EXAMPLE --timeout 10" "$PY $CSP_EXAMPLES/can_joint_impedance.py --timeout 10"; do
