@@ -30,7 +30,7 @@ class TestArm : public Arm {
   std::vector<ArmCommand> commands;
   ArmState cycle(const ArmCommand& command) override {
     commands.push_back(command);
-    if (command.error_recovery) state.errors = rt::Errors{};
+    if (command.error_recovery) state.errors = rt::ErrorSet{};
     return state;
   }
 };
@@ -676,7 +676,7 @@ TEST(CanFuzz, AMillionRandomFramesNoCrashAndOnlyValidReplies) {
     if ((r >> 32) % 5 == 0) f.data[0] = static_cast<uint8_t>(0x20 * ((r >> 40) % 8) | (f.data[0] & 0x1F));
     if ((r >> 44) % 1000 == 0) {   // the robot's state: sometimes absurd values, sometimes a reflex
       for (auto& m : arm.state.joints) m.q = m.dq = m.tau_J = specials[(r >> 50) % 7];
-      arm.state.errors = rt::Errors{};
+      arm.state.errors = rt::ErrorSet{};
       if ((r >> 53) & 1) arm.state.errors.set(static_cast<rt::Error>((r >> 54) % rt::kNumErrors));
     }
     bus.receive(f);

@@ -24,8 +24,8 @@ csp::rt::Scenario quiet_scenario() {
   return s;
 }
 
-csp::rt::Errors only(Error error) {
-  csp::rt::Errors e;
+csp::rt::ErrorSet only(Error error) {
+  csp::rt::ErrorSet e;
   e.set(error);
   return e;
 }

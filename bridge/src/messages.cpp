@@ -39,14 +39,15 @@ std::size_t count_of(double) { return 1; }
 // The RobotState fields of other types than double: each function below converts them by hand.
 #define CSP_BY_HAND(name)
 
-void errors_to_message(const rt::Errors& errors, int8_t (&out)[rt::kNumErrors]) {
-  for (int i = 0; i < rt::kNumErrors; ++i) out[i] = errors.errors()[i] ? 1 : 0;
+void errors_to_message(const franka::Errors& errors, int8_t (&out)[rt::kNumErrors]) {
+  const rt::ErrorSet set(errors);
+  for (int i = 0; i < rt::kNumErrors; ++i) out[i] = set.flags()[i] ? 1 : 0;
 }
 
-rt::Errors errors_from_message(const int8_t (&in)[rt::kNumErrors]) {
+franka::Errors errors_from_message(const int8_t (&in)[rt::kNumErrors]) {
   std::array<bool, rt::kNumErrors> errors{};
   for (int i = 0; i < rt::kNumErrors; ++i) errors[i] = in[i] != 0;
-  return rt::Errors(errors);
+  return franka::Errors(errors);
 }
 
 int64_t big_endian_int64(const void* data) {

@@ -62,7 +62,7 @@ class MotionRunner {
   MotionResult finish() {
     MotionResult result;
     result.reflex = emulator_.state().robot_mode == RobotMode::kReflex;
-    result.errors = emulator_.state().last_motion_errors;
+    result.errors = ErrorSet(emulator_.state().last_motion_errors);
     result.reason = emulator_.reflex_reason();
     report_.controller_compute_us = compute_us_.percentiles();
     result.timing = report_;

@@ -9,20 +9,20 @@ namespace csp::rt {
 namespace {
 
 // Error names joined by '|' (not ", " as libfranka prints them) keep the column one word.
-std::string errors_text(const Errors& errors) {
+std::string errors_text(const ErrorSet& errors) {
   std::string text = "[";
   for (int i = 0; i < kNumErrors; ++i) {
-    if (!errors.errors()[i]) continue;
+    if (!errors.flags()[i]) continue;
     if (text.size() > 1) text += '|';
     text += error_name(static_cast<Error>(i));
   }
   return text + "]";
 }
 
-Errors errors_from_text(const std::string& text, const std::string& where) {
+ErrorSet errors_from_text(const std::string& text, const std::string& where) {
   if (text.size() < 2 || text.front() != '[' || text.back() != ']')
     throw JointLogError(where + "current_errors: expected [name1|name2] or [], got `" + text + "`");
-  Errors errors;
+  ErrorSet errors;
   const std::string names = text.substr(1, text.size() - 2);
   for (std::size_t begin = 0; begin < names.size();) {
     const std::size_t end = std::min(names.find('|', begin), names.size());
@@ -81,7 +81,7 @@ void append_state(JointLog& log, const RobotState& s, bool command_received) {
   log.robot_mode.emplace_back(robot_mode_name(s.robot_mode));
   log.command_received.push_back(command_received ? 1.0 : 0.0);
   log.control_command_success_rate.push_back(s.control_command_success_rate);
-  log.current_errors.push_back(errors_text(s.current_errors));
+  log.current_errors.push_back(errors_text(ErrorSet(s.current_errors)));
 }
 
 RobotState state_from_row(const JointLog& log, std::size_t row) {
@@ -96,7 +96,7 @@ RobotState state_from_row(const JointLog& log, std::size_t row) {
   });
   s.robot_mode = log.robot_mode.empty() ? RobotMode::kMove : robot_mode_from_name(log.robot_mode[row], where);
   if (!log.control_command_success_rate.empty()) s.control_command_success_rate = log.control_command_success_rate[row];
-  if (!log.current_errors.empty()) s.current_errors = errors_from_text(log.current_errors[row], where);
+  if (!log.current_errors.empty()) s.current_errors = errors_from_text(log.current_errors[row], where).errors();
   return s;
 }
 

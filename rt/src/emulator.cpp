@@ -189,7 +189,7 @@ void Emulator::set_K(const Transform& EE_T_K) {
 
 void Emulator::automatic_error_recovery() {
   require_no_motion("automaticErrorRecovery");
-  state_.current_errors = Errors{};
+  state_.current_errors = franka::Errors{};
   state_.joint_collision.fill(0.0);
   state_.cartesian_collision.fill(0.0);
   if (phase_ == Phase::kBraking || phase_ == Phase::kBraked) {
@@ -221,9 +221,11 @@ void Emulator::start_motion(ControlMode mode) {
   reception_.restart();
 }
 
-void Emulator::enter_reflex(const Errors& errors, const std::string& reason) {
-  state_.current_errors.merge(errors);
-  state_.last_motion_errors = errors;
+void Emulator::enter_reflex(const ErrorSet& errors, const std::string& reason) {
+  ErrorSet current(state_.current_errors);
+  current.merge(errors);
+  state_.current_errors = current.errors();
+  state_.last_motion_errors = errors.errors();
   reflex_reason_ = reason.empty() ? std::string(errors) : reason;
   phase_ = Phase::kBraking;
   braking_since_ = state_.time.toSec();
@@ -263,7 +265,7 @@ void Emulator::take_command(const CycleInput& input) {
   const bool received = command && refusal.empty();
   reception_.record(received);
 
-  Errors errors;
+  ErrorSet errors;
   if (!received && refusal.empty()) {   // lost: bridged by the last torque or an extrapolation
     ++counters_.lost_commands;
     counters_.max_consecutive_lost = std::max(counters_.max_consecutive_lost, reception_.consecutive_lost);
@@ -296,8 +298,8 @@ void Emulator::CommandReception::record(bool arrived) {
 
 // Torque mode: the user's torque without gravity (tau_J_d); a lost command reuses the last one.
 // Its change per cycle is bounded by dtau_max.
-Errors Emulator::accept_torque(const Command* command) {
-  Errors errors;
+ErrorSet Emulator::accept_torque(const Command* command) {
+  ErrorSet errors;
   Vector7& last = reception_.last_user_torque;
   const Vector7 user_torque = command ? command->values : last;
   const Vector7 dtau_max = plant_.parameters().joint_limits.dtau_max;
@@ -310,10 +312,10 @@ Errors Emulator::accept_torque(const Command* command) {
 // The external joint motion generator: commanded q_c (or dq_c) of this cycle, its finite-difference
 // derivatives and libfranka's joint_motion_generator_* checks. A lost command is extrapolated with
 // constant acceleration.
-Errors Emulator::run_motion_generator(const Command* command) {
+ErrorSet Emulator::run_motion_generator(const Command* command) {
   const JointLimits& limits = plant_.parameters().joint_limits;
   MotionGenerator& g = motion_generator_;
-  Errors errors;
+  ErrorSet errors;
   Vector7 q_c, dq_c;
   if (!command) {
     dq_c = g.dq_c + g.ddq_c * kDeltaT;
@@ -433,7 +435,7 @@ void Emulator::integrate() {
     gravity_compensation_torque();
     loop.tau_motor = loop.gravity;
     rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, f_ext, arm.tau_J);
-    enter_reflex(Errors{}, "the emulated plant diverged (non-finite joint state); the arm was stopped at its last finite pose");
+    enter_reflex(ErrorSet{}, "the emulated plant diverged (non-finite joint state); the arm was stopped at its last finite pose");
     phase_ = Phase::kBraked;
     return;
   }
@@ -481,7 +483,7 @@ void Emulator::check_limits_and_collisions() {
   const JointLimits& limits = plant_.parameters().joint_limits;
   const PlantState& arm = plant_state_;
   const Estimator& e = estimator_;
-  Errors errors;
+  ErrorSet errors;
   const Vector7 upper = limits.dq_upper(arm.q), lower = limits.dq_lower(arm.q);
   double power = 0.0;
   for (int i = 0; i < kNumJoints; ++i) {

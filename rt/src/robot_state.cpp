@@ -4,43 +4,6 @@
 
 namespace csp::rt {
 
-const char* error_name(Error error) {
-  switch (error) {
-#define CSP_NAME_CASE(name) \
-  case Error::name: return #name;
-    CSP_FRANKA_ERRORS(CSP_NAME_CASE)
-#undef CSP_NAME_CASE
-  }
-  return "unknown_error";
-}
-
-Errors::operator bool() const noexcept {
-  for (bool e : errors_)
-    if (e) return true;
-  return false;
-}
-
-Errors::operator std::string() const {
-  std::string out = "[";
-  for (int i = 0; i < kNumErrors; ++i) {
-    if (!errors_[i]) continue;
-    if (out.size() > 1) out += ", ";
-    out += error_name(static_cast<Error>(i));
-  }
-  return out + "]";
-}
-
-std::ostream& operator<<(std::ostream& out, const Errors& errors) {
-  out << '[';
-  bool first = true;
-  for (int i = 0; i < kNumErrors; ++i) {
-    if (!errors.errors()[i]) continue;
-    out << (first ? "" : ",") << '"' << error_name(static_cast<Error>(i)) << '"';
-    first = false;
-  }
-  return out << ']';
-}
-
 const char* robot_mode_name(RobotMode mode) {
   switch (mode) {
     case RobotMode::kOther: return "Other";
@@ -64,13 +27,22 @@ void json_value(std::ostream& out, const std::array<double, N>& values) {
   out << ']';
 }
 void json_value(std::ostream& out, double value) { out << value; }
-void json_value(std::ostream& out, const Errors& errors) { out << errors; }
+void json_value(std::ostream& out, const franka::Errors& errors) { out << errors; }
 void json_value(std::ostream& out, RobotMode mode) { out << '"' << robot_mode_name(mode) << '"'; }
 void json_value(std::ostream& out, Duration time) { out << time.toMSec(); }
 
 }  // namespace
 
+}  // namespace csp::rt
+
+namespace franka {
+
+std::ostream& operator<<(std::ostream& ostream, RobotMode robot_mode) {
+  return ostream << csp::rt::robot_mode_name(robot_mode);
+}
+
 std::ostream& operator<<(std::ostream& out, const RobotState& s) {
+  using csp::rt::json_value;
   const char* separator = "";
   out << '{';
 #define CSP_FIELD(name)                 \
@@ -82,4 +54,4 @@ std::ostream& operator<<(std::ostream& out, const RobotState& s) {
   return out << '}';
 }
 
-}  // namespace csp::rt
+}  // namespace franka

@@ -1,7 +1,11 @@
 #include "csp/rt/scenario.hpp"
 
+#include <dlfcn.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <system_error>
 
 #include "csp/io/yaml_field.hpp"
 
@@ -233,6 +237,28 @@ Scenario load_scenario(const std::string& path) {
   return s;
 }
 
-std::string default_scenario_path() { return std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml"; }
+// The source tree's configs/ while it exists (the build tree's programs and tests), else the copy
+// installed next to the binary holding this code (<prefix>/lib/libcsp_franka.so or <prefix>/bin/csp
+// -> <prefix>/share/csp/configs), so that an installed CSP, or a Debian package installed under
+// another prefix than the build's, finds its scenarios without the sources.
+std::string shipped_config_dir() {
+  if (const char* dir = std::getenv("CSP_CONFIG_DIR"); dir != nullptr && *dir != '\0') return dir;
+  std::error_code error;
+  const std::filesystem::path source = std::filesystem::path(CSP_SOURCE_DIR) / "configs";
+  if (std::filesystem::is_directory(source, error)) return source.string();
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<void*>(&shipped_config_dir), &info) != 0 && info.dli_fname != nullptr) {
+    const std::filesystem::path installed =
+        std::filesystem::path(info.dli_fname).parent_path().parent_path() / "share" / "csp" / "configs";
+    if (std::filesystem::is_directory(installed, error)) return installed.string();
+  }
+  return CSP_INSTALLED_CONFIG_DIR;
+}
+
+std::string shipped_scenario_path(const std::string& name) {
+  return shipped_config_dir() + "/scenarios/" + name + ".yaml";
+}
+
+std::string default_scenario_path() { return shipped_scenario_path("default"); }
 
 }  // namespace csp::rt

@@ -419,7 +419,7 @@ JointCommand DriveNode::command() const {
   return c;
 }
 
-void DriveNode::update(const JointMeasurement& m, const rt::Errors& errors) {
+void DriveNode::update(const JointMeasurement& m, const rt::ErrorSet& errors) {
   const double torque_step = drive_.rated_torque_mNm * 1e-6;
   values_[s_.position_demand] = to_raw(m.q_d, 1e-6, INT32_MIN, INT32_MAX);
   values_[s_.position] = to_raw(m.q, 1e-6, INT32_MIN, INT32_MAX);
@@ -430,11 +430,11 @@ void DriveNode::update(const JointMeasurement& m, const rt::Errors& errors) {
   const int64_t limit = values_[s_.max_torque];
   torque_limited_ = std::llabs(values_[s_.target_torque] + values_[s_.torque_offset]) > limit &&
                     state_ == DriveState::kOperationEnabled && values_[s_.mode_display] == kModeCst;
-  for (int i = 0; i < rt::kNumErrors; ++i) values_[s_.errors_first + i] = errors.errors()[i] ? 1 : 0;
+  for (int i = 0; i < rt::kNumErrors; ++i) values_[s_.errors_first + i] = errors.flags()[i] ? 1 : 0;
   if (errors && state_ != DriveState::kFault && state_ != DriveState::kFaultReactionActive) {
     bool first = true;
     for (int i = 0; i < rt::kNumErrors; ++i) {
-      if (!errors.errors()[i]) continue;
+      if (!errors.flags()[i]) continue;
       const bool communication = i == static_cast<int>(rt::Error::communication_constraints_violation);
       const uint8_t register_bits = 0x01 | (communication ? 0x10 : 0x80);   // generic + communication / manufacturer
       if (first) enter_fault(emcy_code_of_error(i), i, register_bits);

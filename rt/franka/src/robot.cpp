@@ -27,7 +27,8 @@ bool all_finite(const std::array<double, 7>& values) {
 csp::rt::LoopOptions loop_options(const csp::rt::Scenario& scenario, RealtimeConfig realtime_config) {
   csp::rt::LoopOptions options;
   options.clock = scenario.clock;
-  options.realtime_config = realtime_config;
+  options.realtime_config = realtime_config == RealtimeConfig::kEnforce ? csp::rt::RealtimeConfig::kEnforce
+                                                                      : csp::rt::RealtimeConfig::kIgnore;
   options.faults = scenario.command_faults;
   return options;   // no max_duration: a user's controller decides when its motion ends
 }

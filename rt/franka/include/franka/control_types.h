@@ -4,12 +4,11 @@
 
 #include <algorithm>
 #include <array>
-#include <concepts>
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
 
-#include "csp/rt/control_loop.hpp"
+#include <type_traits>
 
 namespace franka {
 
@@ -18,7 +17,7 @@ namespace franka {
 enum class ControllerMode { kJointImpedance, kCartesianImpedance };
 
 // kEnforce: control() fails without real-time scheduling; kIgnore: it warns and goes on.
-using RealtimeConfig = csp::rt::RealtimeConfig;
+enum class RealtimeConfig { kEnforce, kIgnore };
 
 // Set motion_finished to end the motion after this command (see MotionFinished).
 struct Finishable {
@@ -62,7 +61,7 @@ class JointVelocities : public Finishable {
 };
 
 // The same command, marked as the motion's last.
-template <std::derived_from<Finishable> Command>
+template <typename Command, typename = typename std::enable_if<std::is_base_of<Finishable, Command>::value>::type>
 Command MotionFinished(Command command) noexcept {   // NOLINT(readability-identifier-naming)
   command.motion_finished = true;
   return command;

@@ -88,7 +88,7 @@ struct LoopOptions {
 
 struct MotionResult {
   bool reflex = false;          // the motion ended in a reflex (see errors and reason)
-  Errors errors;                // the errors that aborted it
+  ErrorSet errors;                // the errors that aborted it
   std::string reason;           // Emulator::reflex_reason()
   TimingReport timing;
 };

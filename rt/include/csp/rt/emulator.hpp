@@ -186,11 +186,11 @@ class Emulator {
   void publish();
 
   // Parts of the stages.
-  Errors accept_torque(const Command* command);
-  Errors run_motion_generator(const Command* command);
+  ErrorSet accept_torque(const Command* command);
+  ErrorSet run_motion_generator(const Command* command);
   void gravity_compensation_torque();
   LinkWrenches external_link_wrenches(double t);
-  void enter_reflex(const Errors& errors, const std::string& reason);
+  void enter_reflex(const ErrorSet& errors, const std::string& reason);
 
   void rebuild_internal_model();
   void require_no_motion(const char* operation) const;

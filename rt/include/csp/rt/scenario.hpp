@@ -63,6 +63,11 @@ struct Scenario {
 
 Scenario load_scenario(const std::string& path);
 
+// Where CSP's shipped configs/ (robots/, scenarios/, scenes/) are: $CSP_CONFIG_DIR if set, else the
+// source tree's, else the installed copy (share/csp/configs).
+std::string shipped_config_dir();
+// A shipped scenario by name, e.g. "libfranka_panda" -> <configs>/scenarios/libfranka_panda.yaml.
+std::string shipped_scenario_path(const std::string& name);
 // The scenario the README's main command runs (configs/scenarios/default.yaml).
 std::string default_scenario_path();
 

@@ -26,7 +26,7 @@ struct ArmCommand {
 // The robot's state after a cycle.
 struct ArmState {
   std::array<JointMeasurement, kJoints> joints;
-  rt::Errors errors;             // current_errors: non-empty = a reflex stopped the robot
+  rt::ErrorSet errors;             // current_errors: non-empty = a reflex stopped the robot
 };
 
 // The robot behind the drives: one cycle per SYNC.

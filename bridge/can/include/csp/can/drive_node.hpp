@@ -85,7 +85,7 @@ class DriveNode {
   JointCommand command() const;
   // SYNC, second half: the robot's measurement after the cycle; errors of the whole robot
   // (non-empty = a reflex) fault the drive with one EMCY per error.
-  void update(const JointMeasurement& measured, const rt::Errors& errors);
+  void update(const JointMeasurement& measured, const rt::ErrorSet& errors);
   // Fault reset (402 bit 7 rising edge) or a write to 0x2003 since the last call.
   bool take_recovery_request();
 
