@@ -1,7 +1,9 @@
 // csp_can_joint_impedance: a joint impedance controller in its own process, driving the arm's
 // seven CiA 402 drives over CAN in cyclic synchronous torque mode (docs/can.md):
 //   tau = K (q_d - q) - D dq,  q_d = q_0 + a (1 - cos(2 pi t / T)) on joints 1 and 4,
-// with libfranka's joint_impedance_control gains; the robot adds gravity compensation (0x2000 = 1).
+// with gains below libfranka's joint_impedance_control: over CAN the torque answers the state of
+// the previous SYNC (two cycles from measurement to torque instead of the FCI's one), and the
+// wrist's damping must stay well below inertia / delay. The robot adds gravity (0x2000 = 1).
 // Works unchanged on vcan0 (csp can serve) or a physical interface (can0).
 //   build/apps/csp can serve --iface vcan0 &
 //   build/bridge/can/csp_can_joint_impedance --iface vcan0 --cycles 5000
@@ -25,8 +27,8 @@ int main(int argc, char** argv) {
   app.add_option("--timeout", timeout, "How long to wait for SDO answers and TPDOs [s]")->check(CLI::Range(0.001, 60.0))->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
-  const double K[7] = {600, 600, 600, 600, 250, 150, 50};   // [N m/rad]
-  const double D[7] = {50, 50, 50, 20, 20, 20, 10};         // [N m s/rad]
+  const double K[7] = {300, 300, 300, 300, 120, 60, 20};   // [N m/rad]
+  const double D[7] = {25, 25, 25, 10, 8, 5, 2};          // [N m s/rad]
   try {
     csp::can::Master master(iface, {1, 2, 3, 4, 5, 6, 7}, timeout);
     master.start();

@@ -23,8 +23,10 @@ import sys
 import can
 
 NODES = range(1, 8)
-K = [600, 600, 600, 600, 250, 150, 50]   # [N m/rad], libfranka's joint_impedance_control
-D = [50, 50, 50, 20, 20, 20, 10]         # [N m s/rad]
+# Gains below libfranka's joint_impedance_control: the torque answers the state of the previous
+# SYNC (two cycles from measurement to torque instead of the FCI's one).
+K = [300, 300, 300, 300, 120, 60, 20]    # [N m/rad]
+D = [25, 25, 25, 10, 8, 5, 2]            # [N m s/rad]
 
 
 class Drives:

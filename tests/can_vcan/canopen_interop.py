@@ -116,15 +116,15 @@ def main(csp, vendor, work):
         for node in nodes:
             node.state = "OPERATION ENABLED"
         check(all(n.state == "OPERATION ENABLED" for n in nodes), "BaseNode402.state = OPERATION ENABLED on every node")
-        # Joint 1: +2 mrad in 1 urad steps, one per cycle (inside libfranka's jerk limits).
+        # Joint 1: +400 urad in 1 urad steps, one per cycle (inside libfranka's jerk limits).
         moved_from = cycles[0]
 
         def csp_cycle(k):
-            nodes[0].rpdo[1]["Target position"].raw = start[0] + min(max(k - moved_from, 0), 2000)
+            nodes[0].rpdo[1]["Target position"].raw = start[0] + min(max(k - moved_from, 0), 400)
         on_cycle[0] = csp_cycle
-        wait_cycles(2300)
+        wait_cycles(500)
         q1 = position(nodes[0])
-        check(abs(q1 - (start[0] + 2000)) < 100, "CSP: joint 1 followed +2000 urad (at %+d urad)" % (q1 - start[0]))
+        check(abs(q1 - (start[0] + 400)) < 50, "CSP: joint 1 followed +400 urad (at %+d urad)" % (q1 - start[0]))
         check(not emcy, "no EMCY during the CSP motion: %s" % emcy)
 
         # CST: disable operation (the motion finishes), switch the mode, enable, torque on joint 7.
@@ -140,10 +140,10 @@ def main(csp, vendor, work):
         q7 = position(nodes[6])
         started = cycles[0]
 
-        def cst_cycle(k):   # 0.1 N m on joint 7 (0x6076 = 500 mN m: 200 per mille), ramped over 100 cycles
-            nodes[6].rpdo[1]["Target torque"].raw = min(k - started, 100) * 2
+        def cst_cycle(k):   # 0.1 N m on joint 7 (0x6076 = 500 mN m: 200 per mille), ramped over 50 cycles
+            nodes[6].rpdo[1]["Target torque"].raw = min(k - started, 50) * 4
         on_cycle[0] = cst_cycle
-        wait_cycles(400)
+        wait_cycles(250)
         moved = position(nodes[6]) - q7
         check(moved > 1000, "CST: 0.1 N m turned joint 7 (%+d urad)" % moved)
         check(not emcy, "no EMCY during the CST motion: %s" % emcy)

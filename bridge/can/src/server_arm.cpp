@@ -122,7 +122,7 @@ ArmState ServerArm::cycle(const ArmCommand& command) {
   ArmState state;
   for (int j = 0; j < kJoints; ++j)
     state.joints[j] = JointMeasurement{s.q[j], s.q_d[j], s.dq[j], s.tau_J[j], s.tau_J_d[j], s.tau_ext_hat_filtered[j]};
-  state.errors = s.current_errors;
+  state.errors = rt::ErrorSet(s.current_errors);
   return state;
 }
 
