@@ -1,5 +1,8 @@
-// csp can: the arm's joint drives on a CANopen bus (docs/can.md). `csp can eds` and `csp can dbc`
-// print the files generated from the drives' object table.
+// csp can: the arm's joint drives on a CANopen bus (docs/can.md). `csp can serve` runs them on
+// SocketCAN; `csp can eds` and `csp can dbc` print the files generated from the drives' object table.
+#include <atomic>
+#include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -7,13 +10,24 @@
 
 #include "commands.hpp"
 #include "csp/can/export.hpp"
+#include "csp/can/serve.hpp"
 
 namespace csp::cli {
 namespace {
 
+std::atomic<bool> interrupted{false};
+
 struct CanArguments {
   int node = 1;
   std::string out;
+  // serve
+  ScenarioArguments scenario;
+  std::string clock = "sync";
+  std::string iface = "vcan0";
+  bool sync_producer = false;
+  double bitrate = 1e6;
+  int split = 1;
+  std::string log;
 };
 
 int write_text(const std::string& text, const std::string& path) {
@@ -26,12 +40,92 @@ int write_text(const std::string& text, const std::string& path) {
   return 0;
 }
 
+int run_serve(const CanArguments& args) {
+  const rt::Scenario scenario = args.scenario.load();
+  can::CanServeOptions options;
+  options.interface = args.iface;
+  options.split = args.split;
+  options.clock = args.clock == "realtime" ? rt::Clock::kRealtime : rt::Clock::kLockstep;
+  options.sync_producer = args.sync_producer;
+  options.bitrate = args.bitrate;
+  options.log_path = args.log;
+  options.duration = scenario.duration;
+  options.stop = &interrupted;
+  // Ctrl-C / SIGTERM end the run cleanly: the log keeps every cycle run.
+  std::signal(SIGINT, [](int) { interrupted = true; });
+  std::signal(SIGTERM, [](int) { interrupted = true; });
+  std::vector<std::string> names;
+  try {
+    names = can::split_interfaces(args.iface, args.split);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  std::string list;
+  for (const std::string& n : names) {
+    if (!list.empty()) list += ", ";
+    list += n;
+  }
+  std::printf("csp can serve: %s (%s), %s clock%s, up to %.3f s on %s\n", scenario.name.c_str(), scenario.path.c_str(),
+              args.clock.c_str(), args.sync_producer ? ", CSP sends SYNC" : ", the master sends SYNC", options.duration, list.c_str());
+  std::fflush(stdout);
+  const can::CanServeReport r = can::serve(scenario, options);
+
+  std::printf("  ran %llu cycles in %.3f s%s\n", static_cast<unsigned long long>(r.cycles), r.wall_seconds, interrupted ? ", interrupted" : "");
+  std::printf("  motions %llu, motion cycles %llu, lost commands %llu (longest run %d), reflexes %llu, error recoveries %llu\n",
+              static_cast<unsigned long long>(r.arm.motions), static_cast<unsigned long long>(r.emulator.motion_cycles),
+              static_cast<unsigned long long>(r.emulator.lost_commands), r.emulator.max_consecutive_lost,
+              static_cast<unsigned long long>(r.emulator.reflexes), static_cast<unsigned long long>(r.arm.recoveries));
+  std::printf("  bus: SYNCs %llu, cycles without SYNC %llu, lost %llu, torn %llu, ignored frames %llu, mixed modes %llu\n",
+              static_cast<unsigned long long>(r.bus.syncs), static_cast<unsigned long long>(r.bus.missing_syncs),
+              static_cast<unsigned long long>(r.bus.lost_cycles), static_cast<unsigned long long>(r.bus.torn_cycles),
+              static_cast<unsigned long long>(r.bus.ignored_frames), static_cast<unsigned long long>(r.arm.mixed_modes));
+  for (const can::InterfaceReport& i : r.interfaces) {
+    std::string joints;
+    for (int j : i.joints) {
+      if (!joints.empty()) joints += ",";
+      joints += std::to_string(j);
+    }
+    std::printf("  %s (joints %s): %llu frames, %llu bits (worst-case stuffing), load at %.0f bit/s and 1 kHz: %.1f %% (%.0f bit/s of wall time); "
+                "received %llu, sent %llu, skipped %llu, send failures %llu\n",
+                i.name.c_str(), joints.c_str(), static_cast<unsigned long long>(i.load.frames()),
+                static_cast<unsigned long long>(i.load.bits()), args.bitrate, i.load_percent,
+                static_cast<double>(i.load.bits()) / r.wall_seconds,
+                static_cast<unsigned long long>(i.socket.received), static_cast<unsigned long long>(i.socket.sent),
+                static_cast<unsigned long long>(i.socket.skipped), static_cast<unsigned long long>(i.socket.send_failures));
+  }
+  if (options.clock == rt::Clock::kRealtime) {
+    const rt::Percentiles& w = r.wakeup_latency_us;
+    std::printf("  wake-up latency after deadline: p50 %.1f  p99 %.1f  max %.1f us; overruns %llu, missed deadlines %llu\n", w.p50,
+                w.p99, w.max, static_cast<unsigned long long>(r.overruns), static_cast<unsigned long long>(r.missed_deadlines));
+  }
+  for (const std::string& warning : r.warnings) std::printf("  warning: %s\n", warning.c_str());
+  if (!r.last_reflex.empty()) std::printf("  last reflex: %s\n", r.last_reflex.c_str());
+  if (!args.log.empty()) std::printf("  log: %s (%llu events)\n", args.log.c_str(), static_cast<unsigned long long>(r.log_events));
+  return 0;
+}
+
 }  // namespace
 
 Command add_can_command(CLI::App& app) {
   auto args = std::make_shared<CanArguments>();
-  CLI::App* cmd = app.add_subcommand("can", "The joint drives as CANopen CiA 402 nodes: EDS and DBC (docs/can.md)");
+  CLI::App* cmd = app.add_subcommand("can", "The joint drives as CANopen CiA 402 nodes: serve on SocketCAN, EDS, DBC (docs/can.md)");
   cmd->require_subcommand(1);
+  CLI::App* serve = cmd->add_subcommand("serve", "Run a scenario's arm as seven CiA 402 drives on SocketCAN (vcan0, can0, ...)");
+  serve->add_option("scenario", args->scenario.scenario, "Scenario file (default: configs/scenarios/default.yaml)");
+  serve->add_option("--iface", args->iface, "CAN interface (with --split: the first of numbered ones)")->capture_default_str();
+  serve->add_option("--clock", args->clock, "sync: one cycle per SYNC; realtime: the 1 kHz deadline clock")
+      ->check(CLI::IsMember({"sync", "realtime"}))
+      ->capture_default_str();
+  serve->add_flag("--sync-producer", args->sync_producer,
+                  "CSP sends SYNC (realtime: every 1 ms; sync: once the enabled joints' RPDOs are in)");
+  serve->add_option("--bitrate", args->bitrate, "Bitrate of the real bus the load is reported for [bit/s]")
+      ->check(CLI::Range(1e3, 1e7))
+      ->capture_default_str();
+  serve->add_option("--split", args->split, "Spread the joints over this many interfaces (vcan0, vcan1, ...)")
+      ->check(CLI::Range(1, 7))
+      ->capture_default_str();
+  serve->add_option("--log", args->log, "Record the session as an LCM log (csp replay re-simulates it)");
+  serve->add_option("--duration", args->scenario.duration, "Robot time to serve [s] (default: the scenario's)");
   CLI::App* eds = cmd->add_subcommand("eds", "Print the EDS (CiA 306) of a joint drive");
   eds->add_option("--node", args->node, "Node id 1..7 = joint 1..7 (the default assignment)")
       ->check(CLI::Range(1, 7))
@@ -39,7 +133,8 @@ Command add_can_command(CLI::App& app) {
   eds->add_option("-o,--out", args->out, "Write to this file instead of stdout");
   CLI::App* dbc = cmd->add_subcommand("dbc", "Print the DBC of the bus (default mapping, nodes 1..7)");
   dbc->add_option("-o,--out", args->out, "Write to this file instead of stdout");
-  return [args, eds] {
+  return [args, eds, serve] {
+    if (serve->parsed()) return run_serve(*args);
     if (eds->parsed()) return write_text(can::make_eds(can::panda_joint_drive(args->node)), args->out);
     return write_text(can::make_dbc(can::BusSettings{}), args->out);
   };

@@ -70,6 +70,24 @@ void DriveBus::on_sync() {
   command_.complete = enabled > 0 && received == enabled;
   if (enabled > 0 && !command_.complete) ++counters_.lost_cycles;
   if (received > 0 && received < enabled) ++counters_.torn_cycles;
+  run_arm();
+}
+
+void DriveBus::cycle_without_sync() {
+  ++counters_.missing_syncs;
+  bool enabled = false;
+  for (int j = 0; j < kJoints; ++j) {
+    command_.joints[j] = nodes_[j].command();
+    command_.joints[j].received = false;   // the RPDOs wait for the SYNC that latches them
+    enabled = enabled || command_.joints[j].operation_enabled;
+  }
+  command_.complete = false;
+  command_.error_recovery = false;
+  if (enabled) ++counters_.lost_cycles;
+  run_arm();
+}
+
+void DriveBus::run_arm() {
   const ArmState state = arm_.cycle(command_);
   for (int j = 0; j < kJoints; ++j) nodes_[j].update(state.joints[j], state.errors);
 }

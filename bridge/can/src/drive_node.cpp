@@ -46,6 +46,7 @@ DriveNode::DriveNode(uint8_t node_id, const JointDrive& drive, const Identity& i
   s_.quick_stop_option = slot(od::kQuickStopOptionCode, 0);
   s_.mode = slot(od::kModesOfOperation, 0);
   s_.mode_display = slot(od::kModesOfOperationDisplay, 0);
+  s_.position_demand = slot(od::kPositionDemandValue, 0);
   s_.position = slot(od::kPositionActualValue, 0);
   s_.velocity = slot(od::kVelocityActualValue, 0);
   s_.target_torque = slot(od::kTargetTorque, 0);
@@ -420,6 +421,7 @@ JointCommand DriveNode::command() const {
 
 void DriveNode::update(const JointMeasurement& m, const rt::ErrorSet& errors) {
   const double torque_step = drive_.rated_torque_mNm * 1e-6;
+  values_[s_.position_demand] = to_raw(m.q_d, 1e-6, INT32_MIN, INT32_MAX);
   values_[s_.position] = to_raw(m.q, 1e-6, INT32_MIN, INT32_MAX);
   values_[s_.velocity] = to_raw(m.dq, 1e-6, INT32_MIN, INT32_MAX);
   values_[s_.torque_actual] = to_raw(m.tau_J, torque_step, INT16_MIN, INT16_MAX);

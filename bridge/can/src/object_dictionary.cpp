@@ -223,6 +223,8 @@ ObjectTable object_table(const JointDrive& drive, const Identity& identity) {
   b.var(od::kQuickStopOptionCode, "Quick stop option code", DT::kInteger16, A::kReadWrite, 2, false, 0, 8);
   b.var(od::kModesOfOperation, "Modes of operation", DT::kInteger8, A::kReadWrite, kModeCst, true, kModeCsp, kModeCst);
   b.var(od::kModesOfOperationDisplay, "Modes of operation display", DT::kInteger8, A::kReadOnly, kModeCst, true);
+  // q_d: where a CSP motion must start (libfranka's motion generators start from q_d, not q).
+  b.var(od::kPositionDemandValue, "Position demand value", DT::kInteger32, A::kReadOnly, 0, true, kI32Min, kI32Max, "urad");
   b.var(od::kPositionActualValue, "Position actual value", DT::kInteger32, A::kReadOnly, 0, true, kI32Min, kI32Max, "urad");
   b.var(od::kVelocityActualValue, "Velocity actual value", DT::kInteger32, A::kReadOnly, 0, true, kI32Min, kI32Max,
         "urad/s");

@@ -42,6 +42,7 @@ class RobotServer {
   // Handles one message received during the current cycle.
   void receive(const std::string& channel, const void* data, int size, int64_t utime);
   bool in_session() const { return session_.has_value(); }
+  std::optional<rt::ControlMode> session() const { return session_; }
   bool answered() const { return command_.has_value(); }   // this cycle's command arrived
   // Ends the cycle: steps the emulator with the command that answered the state, or none.
   void step(int64_t utime);

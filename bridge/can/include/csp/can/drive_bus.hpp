@@ -49,6 +49,7 @@ struct BusCounters {
   uint64_t lost_cycles = 0;      // an enabled arm without a complete set of RPDOs
   uint64_t torn_cycles = 0;      // some enabled joints' RPDOs arrived, others not
   uint64_t ignored_frames = 0;   // COB-IDs no node uses, malformed NMT frames
+  uint64_t missing_syncs = 0;    // cycles run without the master's SYNC (real-time clock)
 };
 
 class DriveBus {
@@ -62,6 +63,9 @@ class DriveBus {
   void receive(const Frame& frame);
   // One cycle: TPDOs out (the state at this SYNC), RPDOs latched, the arm steps once.
   void on_sync();
+  // A cycle the master's SYNC did not come for (real-time clock following the master): the robot
+  // runs it without a command, as the FCI runs a cycle whose command is late; no PDO moves.
+  void cycle_without_sync();
   // Time for heartbeats (producer 0x1017, consumer 0x1016).
   void elapse(uint32_t microseconds);
 
@@ -77,6 +81,8 @@ class DriveBus {
   std::vector<Frame> out_;
   std::vector<DriveNode> nodes_;
   std::array<int, 128> joint_of_node_{};   // -1: no node of ours
+  void run_arm();
+
   ArmCommand command_;
   BusCounters counters_;
 };

@@ -40,6 +40,7 @@ inline constexpr uint16_t kEmcyErrorReset = 0x0000, kEmcyHeartbeat = 0x8130, kEm
 // One joint's measured state, SI units (libfranka names).
 struct JointMeasurement {
   double q = 0.0;                      // [rad]
+  double q_d = 0.0;                    // desired position: where a CSP motion starts [rad]
   double dq = 0.0;                     // [rad/s]
   double tau_J = 0.0;                  // measured link-side torque, gravity included [N m]
   double tau_J_d = 0.0;                // commanded torque without gravity [N m]
@@ -149,7 +150,7 @@ class DriveNode {
   uint32_t consumer_elapsed_us_ = 0;
   // Slots of the objects the drive logic reads every cycle.
   struct Slots {
-    int error_register, controlword, statusword, quick_stop_option, mode, mode_display, position, velocity, target_torque,
+    int error_register, controlword, statusword, quick_stop_option, mode, mode_display, position_demand, position, velocity, target_torque,
         max_torque, torque_demand, torque_actual, target_position, velocity_offset, torque_offset, target_velocity,
         gravity_compensation, tau_ext, errors_first, heartbeat_producer, heartbeat_consumer, cob_id_emcy;
   } s_{};

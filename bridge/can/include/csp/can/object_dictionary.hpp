@@ -103,7 +103,7 @@ inline constexpr uint16_t kGravityCompensation = 0x2000, kTauExtHatFiltered = 0x
                           kAutomaticErrorRecovery = 0x2003;
 inline constexpr uint16_t kControlword = 0x6040, kStatusword = 0x6041, kQuickStopOptionCode = 0x605A,
                           kModesOfOperation = 0x6060, kModesOfOperationDisplay = 0x6061,
-                          kPositionActualValue = 0x6064, kVelocityActualValue = 0x606C, kTargetTorque = 0x6071,
+                          kPositionDemandValue = 0x6062, kPositionActualValue = 0x6064, kVelocityActualValue = 0x606C, kTargetTorque = 0x6071,
                           kMaxTorque = 0x6072, kTorqueDemand = 0x6074, kMotorRatedTorque = 0x6076,
                           kTorqueActualValue = 0x6077, kTargetPosition = 0x607A, kSoftwarePositionLimit = 0x607D,
                           kMaxMotorSpeed = 0x6080, kVelocityOffset = 0x60B1, kTorqueOffset = 0x60B2,

@@ -1,0 +1,64 @@
+// The Arm behind the CAN drives in `csp can serve`: bridge's transport-free RobotServer, the one
+// LCM feeds. Each SYNC becomes one server cycle with the messages an LCM controller would have
+// sent (START_MOTION, one command answering the state, AUTOMATIC_ERROR_RECOVERY), so that a CAN
+// session is logged in the LCM log format and `csp replay` re-simulates it bit for bit.
+//
+// Franka's semantics on top of CiA 402 (docs/can.md, "The robot behind the drives"):
+// - all seven joints reaching operation enabled in one mode start a motion: CST (10) -> torque
+//   mode (without gravity; 0x2000 = 0: the master's torque includes gravity), CSP (8) -> joint
+//   position mode, CSV (9) -> joint velocity mode, with every check the emulator makes;
+// - a joint leaving operation enabled, or a mode change, finishes the motion;
+// - a cycle without every enabled joint's RPDO is lost: 20 in a row give the reflex
+//   communication_constraints_violation; any reflex faults every drive (EMCY, 402 fault);
+// - a fault reset (or 0x2003) is libfranka's automaticErrorRecovery().
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "csp/bridge/lcm_log.hpp"
+#include "csp/bridge/server.hpp"
+#include "csp/can/drive_bus.hpp"
+#include "csp/rt/scenario.hpp"
+
+namespace csp::can {
+
+struct ServerArmCounters {
+  uint64_t motions = 0;           // START_MOTION requests sent
+  uint64_t mixed_modes = 0;       // all joints enabled, but not in one mode: no motion
+  uint64_t recoveries = 0;        // AUTOMATIC_ERROR_RECOVERY requests sent
+};
+
+class ServerArm : public Arm {
+ public:
+  // `log_path` empty: no session log. `diagnostic` gets the server's notable events.
+  ServerArm(const rt::Scenario& scenario, const std::string& log_path, bridge::RobotServer::Diagnostic diagnostic);
+
+  ArmState cycle(const ArmCommand& command) override;
+
+  const bridge::RobotServer& server() const { return server_; }
+  const ServerArmCounters& counters() const { return counters_; }
+  bridge::LogWriter* log() { return log_.get(); }
+  uint64_t state_messages() const { return state_messages_; }
+
+ private:
+  void request(int8_t kind, rt::ControlMode mode);
+  void send_command(rt::ControlMode mode, const rt::Command& command);
+  void deliver(const std::string& channel, const std::vector<uint8_t>& bytes);   // logged, then handled
+  void log_state();
+  rt::Command command_values(rt::ControlMode mode, const ArmCommand& command);
+
+  bridge::Channels channels_;
+  std::unique_ptr<bridge::LogWriter> log_;
+  bridge::RobotServer server_;
+  ServerArmCounters counters_;
+  bool all_enabled_before_ = false;   // the previous cycle had every joint in operation enabled
+  rt::Command last_command_;          // what a finishing command repeats
+  int64_t request_id_ = 0;
+  uint64_t state_messages_ = 0;
+  Data data_;                         // gravity of the robot's model (0x2000 = 0)
+};
+
+}  // namespace csp::can

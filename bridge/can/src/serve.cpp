@@ -1,0 +1,264 @@
+#include "csp/can/serve.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+
+#include "csp/rt/control_loop.hpp"
+#include "csp/rt/deadline_clock.hpp"
+
+namespace csp::can {
+namespace {
+
+using rt::monotonic_ns;
+
+// Sync clock with CSP's SYNC: how long a cycle waits for the enabled joints' RPDOs before it
+// runs without them (lost), and the pace while no joint is enabled.
+constexpr int64_t kLockstepTimeoutNs = 100'000'000;
+constexpr int64_t kIdleSyncNs = 1'000'000;
+constexpr int64_t kIdleAfterNs = 100'000'000;
+
+// One serve run: the sockets, the drives, the robot, the bus-load counters.
+class CanSession {
+ public:
+  CanSession(const rt::Scenario& scenario, const CanServeOptions& options)
+      : options_(options),
+        arm_(scenario, options.log_path,
+             [this](const std::string& line) {
+               if (!options_.quiet) std::cerr << "csp can serve: " << line << '\n';
+             }),
+        bus_(BusSettings{}, arm_) {
+    const std::vector<std::string> names = split_interfaces(options.interface, options.split);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      sockets_.push_back(std::make_unique<SocketCan>(names[i]));
+      socket_list_.push_back(sockets_.back().get());
+      report_.interfaces.push_back(InterfaceReport{names[i], {}, {}, {}, 0.0});
+    }
+    for (int j = 0; j < kJoints; ++j) {
+      report_.interfaces[interface_of_joint(j, options.split)].joints.push_back(j + 1);
+      interface_of_node_[BusSettings{}.node_ids[j]] = interface_of_joint(j, options.split);
+    }
+    sync_pending_.assign(names.size(), false);
+    flush();   // the boot-up messages
+  }
+
+  DriveBus& bus() { return bus_; }
+  ServerArm& arm() { return arm_; }
+  CanServeReport& report() { return report_; }
+  void collect_socket_counters() {
+    for (std::size_t i = 0; i < sockets_.size(); ++i) report_.interfaces[i].socket = sockets_[i]->counters();
+  }
+  uint64_t syncs_marked() const { return syncs_marked_; }
+  uint64_t cycles() const { return bus_.counters().syncs + bus_.counters().missing_syncs; }
+  bool stopped() const { return options_.stop && options_.stop->load(); }
+
+  // Handles the frames waiting on every interface. A SYNC runs the cycle once it has come on
+  // every interface; an interface's frames after its SYNC wait for that cycle.
+  void receive() {
+    for (std::size_t i = 0; i < sockets_.size(); ++i) {
+      while (!sync_pending_[i]) {
+        const std::optional<Frame> frame = sockets_[i]->receive();
+        if (!frame) break;
+        report_.interfaces[i].load.add(*frame);
+        if (frame->id == kSync) on_sync(i, *frame);
+        else bus_.receive(*frame);
+      }
+    }
+    flush();
+  }
+
+  // CSP's SYNC on every interface.
+  void produce_sync() {
+    Frame sync;
+    sync.id = kSync;
+    mark_sync();
+    for (std::size_t i = 0; i < sockets_.size(); ++i) send(i, sync);
+    bus_.receive(sync);
+    robot_time_cycle();
+    flush();
+  }
+
+  void cycle_without_sync() {
+    bus_.cycle_without_sync();
+    flush();
+  }
+
+  // Waits up to `timeout_ns` for frames.
+  void wait(int64_t timeout_ns) {
+    bool all_pending = true;
+    for (bool p : sync_pending_) all_pending = all_pending && p;
+    if (!all_pending) wait_readable(socket_list_, timeout_ns);
+  }
+
+  // Sync clock: heartbeat time is robot time (1 ms per cycle) while cycles run, and wall time
+  // while none has run for kIdleAfterNs (a master that has not started, or has stopped, SYNC).
+  void elapse() {
+    const int64_t now = monotonic_ns();
+    const int64_t us = (now - last_elapse_ns_) / 1000;
+    if (us <= 0) return;
+    last_elapse_ns_ += us * 1000;
+    if (now - last_cycle_ns_ < kIdleAfterNs) return;
+    bus_.elapse(static_cast<uint32_t>(std::min<int64_t>(us, 1'000'000)));
+    flush();
+  }
+
+  // Sync clock with CSP's SYNC: every enabled joint's RPDO has come (or none is enabled and a
+  // millisecond passed, or the enabled ones waited too long).
+  bool sync_due(int64_t since_last_sync_ns) const {
+    int enabled = 0, received = 0;
+    for (int j = 0; j < kJoints; ++j) {
+      const JointCommand c = bus_.node(j).command();
+      enabled += c.operation_enabled ? 1 : 0;
+      received += c.operation_enabled && c.received ? 1 : 0;
+    }
+    if (enabled == 0) return since_last_sync_ns >= kIdleSyncNs;
+    return received == enabled || since_last_sync_ns >= kLockstepTimeoutNs;
+  }
+
+ private:
+  void on_sync(std::size_t interface, const Frame& sync) {
+    sync_pending_[interface] = true;
+    for (bool p : sync_pending_)
+      if (!p) return;
+    sync_pending_.assign(sync_pending_.size(), false);
+    mark_sync();
+    bus_.receive(sync);
+    robot_time_cycle();
+  }
+
+  void robot_time_cycle() {
+    last_cycle_ns_ = monotonic_ns();
+    if (options_.clock == rt::Clock::kLockstep) bus_.elapse(1000);
+  }
+
+  // The bus load at 1 kHz counts the traffic between the first and the last SYNC.
+  void mark_sync() {
+    for (InterfaceReport& i : report_.interfaces) {
+      if (syncs_marked_ == 0) i.bits_at_first_sync = i.load.bits();
+      i.bits_at_last_sync = i.load.bits();
+    }
+    ++syncs_marked_;
+  }
+
+  void send(std::size_t interface, const Frame& frame) {
+    report_.interfaces[interface].load.add(frame);
+    sockets_[interface]->send(frame);
+  }
+
+  // The nodes' frames, each to its node's interface.
+  void flush() {
+    for (const Frame& f : bus_.sent()) send(static_cast<std::size_t>(interface_of_node_[f.id & 0x7F]), f);
+    bus_.clear_sent();
+  }
+
+  const CanServeOptions& options_;
+  ServerArm arm_;
+  DriveBus bus_;
+  std::vector<std::unique_ptr<SocketCan>> sockets_;
+  std::vector<SocketCan*> socket_list_;
+  std::array<int, 128> interface_of_node_{};
+  std::vector<bool> sync_pending_;
+  int64_t last_elapse_ns_ = monotonic_ns();
+  int64_t last_cycle_ns_ = 0;
+  CanServeReport report_;
+  uint64_t syncs_marked_ = 0;
+};
+
+void run_sync(CanSession& s, uint64_t cycles, const CanServeOptions& options) {
+  int64_t last_sync = monotonic_ns();
+  while (s.cycles() < cycles && !s.stopped()) {
+    if (options.sync_producer) {
+      s.wait(std::min<int64_t>(kIdleSyncNs, 10'000'000));
+      s.receive();
+      const int64_t now = monotonic_ns();
+      if (s.sync_due(now - last_sync)) {
+        s.produce_sync();
+        last_sync = now;
+      }
+    } else {
+      s.wait(10'000'000);   // heartbeats keep their pace while the master is silent
+      s.receive();
+    }
+    s.elapse();
+  }
+}
+
+void run_realtime(CanSession& s, uint64_t cycles, const CanServeOptions& options) {
+  rt::DeadlineClock clock;
+  while (s.cycles() < cycles && !s.stopped()) {
+    const uint64_t cycles_before = s.cycles();
+    while (!clock.reached() && !s.stopped()) {
+      s.wait(clock.time_to_spin_ns());
+      s.receive();
+    }
+    s.bus().elapse(static_cast<uint32_t>(rt::DeadlineClock::kPeriodNs / 1000));
+    // At the deadline: CSP's SYNC, or a cycle without a command if the master's SYNC did not come.
+    const auto robot_cycle = [&] {
+      if (options.sync_producer) s.produce_sync();
+      else s.cycle_without_sync();
+    };
+    if (options.sync_producer || s.cycles() == cycles_before) robot_cycle();
+    for (int64_t missed = clock.end_cycle(); missed > 0 && s.cycles() < cycles; --missed) robot_cycle();
+  }
+  s.report().overruns = clock.overruns();
+  s.report().missed_deadlines = clock.missed_deadlines();
+  s.report().wakeup_latency_us = clock.wakeup_latency_us().percentiles();
+}
+
+}  // namespace
+
+std::vector<std::string> split_interfaces(const std::string& first, int split) {
+  if (split < 1 || split > kJoints) throw std::invalid_argument("--split: expected 1 to 7 interfaces");
+  if (split == 1) return {first};
+  std::size_t digits = first.size();
+  while (digits > 0 && std::isdigit(static_cast<unsigned char>(first[digits - 1]))) --digits;
+  if (digits == first.size() || first.size() - digits > 3)
+    throw std::invalid_argument("--split: the interface `" + first + "` must end in a number (vcan0: vcan0, vcan1, ...)");
+  const int base = std::stoi(first.substr(digits));
+  std::vector<std::string> names;
+  for (int i = 0; i < split; ++i) names.push_back(first.substr(0, digits) + std::to_string(base + i));
+  return names;
+}
+
+int interface_of_joint(int joint, int split) { return joint * split / kJoints; }
+
+CanServeReport serve(const rt::Scenario& scenario, const CanServeOptions& options) {
+  if (!(options.duration > 0.0) || !std::isfinite(options.duration)) throw std::invalid_argument("duration: expected a positive number of seconds");
+  if (!(options.bitrate >= 1e3 && options.bitrate <= 1e7)) throw std::invalid_argument("--bitrate: expected 1000 to 10000000 bit/s");
+  CanSession session(scenario, options);
+  CanServeReport& report = session.report();
+  if (options.clock == rt::Clock::kRealtime)
+    for (const std::string& missing : rt::enable_realtime_scheduling())
+      report.warnings.push_back("no real-time scheduling (" + missing + "): timing will suffer");
+  const auto cycles = static_cast<uint64_t>(std::llround(options.duration / rt::kDeltaT));
+  const int64_t start_ns = monotonic_ns();
+  if (options.clock == rt::Clock::kRealtime) run_realtime(session, cycles, options);
+  else run_sync(session, cycles, options);
+  report.wall_seconds = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
+
+  session.collect_socket_counters();
+  report.cycles = session.cycles();
+  report.bus = session.bus().counters();
+  report.arm = session.arm().counters();
+  report.server = session.arm().server().counters();
+  report.emulator = session.arm().server().emulator().counters();
+  report.last_reflex = session.arm().server().emulator().reflex_reason();
+  for (InterfaceReport& i : report.interfaces) {
+    if (session.syncs_marked() < 2) continue;
+    const double seconds = static_cast<double>(session.syncs_marked() - 1) * rt::kDeltaT;
+    i.load_percent = 100.0 * static_cast<double>(i.bits_at_last_sync - i.bits_at_first_sync) / (options.bitrate * seconds);
+    if (i.load_percent > 100.0)
+      report.warnings.push_back(i.name + ": the traffic needs " + std::to_string(static_cast<int>(std::lround(i.load_percent))) +
+                                " % of a " + std::to_string(static_cast<int64_t>(options.bitrate)) +
+                                " bit/s bus at 1 kHz: it would not fit on a real bus (use --split)");
+  }
+  if (session.arm().log()) {
+    session.arm().log()->flush();
+    report.log_events = session.arm().log()->events();
+  }
+  return report;
+}
+
+}  // namespace csp::can

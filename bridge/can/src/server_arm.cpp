@@ -1,0 +1,129 @@
+#include "csp/can/server_arm.hpp"
+
+#include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/arrays.hpp"
+
+namespace csp::can {
+namespace {
+
+std::optional<rt::ControlMode> control_mode_of(int8_t mode) {
+  switch (mode) {
+    case kModeCst: return rt::ControlMode::kTorque;
+    case kModeCsp: return rt::ControlMode::kJointPosition;
+    case kModeCsv: return rt::ControlMode::kJointVelocity;
+    default: return std::nullopt;
+  }
+}
+
+}  // namespace
+
+ServerArm::ServerArm(const rt::Scenario& scenario, const std::string& log_path, bridge::RobotServer::Diagnostic diagnostic)
+    : log_(log_path.empty() ? nullptr : std::make_unique<bridge::LogWriter>(log_path)),
+      server_(
+          scenario.emulator, channels_,
+          [this](const std::string& channel, const std::vector<uint8_t>& bytes) {
+            if (log_) log_->write(channel, bytes, bridge::now_utime());
+          },
+          std::move(diagnostic)) {
+  if (log_) log_->write(channels_.scenario, bridge::encode(bridge::scenario_message(scenario, "")), bridge::now_utime());
+  log_state();
+}
+
+void ServerArm::deliver(const std::string& channel, const std::vector<uint8_t>& bytes) {
+  const int64_t utime = bridge::now_utime();
+  if (log_) log_->write(channel, bytes, utime);
+  server_.receive(channel, bytes.data(), static_cast<int>(bytes.size()), utime);
+}
+
+void ServerArm::request(int8_t kind, rt::ControlMode mode) {
+  config_request_t r{};
+  r.utime = bridge::now_utime();
+  r.request_id = ++request_id_;
+  r.request = kind;
+  r.control_mode = bridge::control_mode_code(mode);
+  deliver(channels_.config, bridge::encode(r));
+}
+
+void ServerArm::send_command(rt::ControlMode mode, const rt::Command& command) {
+  deliver(channels_.command, bridge::encode_command(mode, server_.message_id(), command, bridge::now_utime()));
+  last_command_ = command;
+}
+
+void ServerArm::log_state() {
+  if (!log_) return;
+  const int64_t utime = bridge::now_utime();
+  log_->write(channels_.state, bridge::encode(server_.state_message(utime)), utime);
+  ++state_messages_;
+}
+
+rt::Command ServerArm::command_values(rt::ControlMode mode, const ArmCommand& command) {
+  rt::Command c;
+  bool subtract_gravity = false;
+  for (int j = 0; j < kJoints; ++j) {
+    const JointCommand& joint = command.joints[j];
+    if (mode == rt::ControlMode::kTorque) c.values[j] = joint.target_torque;
+    if (mode == rt::ControlMode::kJointPosition) c.values[j] = joint.target_position;
+    if (mode == rt::ControlMode::kJointVelocity) c.values[j] = joint.target_velocity;
+    subtract_gravity = subtract_gravity || (mode == rt::ControlMode::kTorque && !joint.gravity_compensation);
+  }
+  if (subtract_gravity) {
+    // The master's torque holds the arm itself: take off the gravity the robot adds (its own
+    // model at the measured q), joint by joint.
+    Vector7 gravity;
+    gravity_torque(server_.emulator().internal_model(), data_, from_array<Vector7>(server_.emulator().state().q), gravity);
+    for (int j = 0; j < kJoints; ++j)
+      if (!command.joints[j].gravity_compensation) c.values[j] -= gravity[j];
+  }
+  return c;
+}
+
+ArmState ServerArm::cycle(const ArmCommand& command) {
+  const rt::RobotState& before = server_.emulator().state();
+  if (command.error_recovery && !server_.in_session() && (bool(before.current_errors) || before.robot_mode == rt::RobotMode::kReflex)) {
+    request(config_request_t::AUTOMATIC_ERROR_RECOVERY, rt::ControlMode::kTorque);
+    ++counters_.recoveries;
+  }
+
+  bool all_enabled = true, one_mode = true;
+  for (const JointCommand& joint : command.joints) {
+    all_enabled = all_enabled && joint.operation_enabled;
+    one_mode = one_mode && joint.mode == command.joints[0].mode;
+  }
+  const std::optional<rt::ControlMode> mode = one_mode ? control_mode_of(command.joints[0].mode) : std::nullopt;
+  if (all_enabled && !all_enabled_before_ && !server_.in_session()) {
+    // The drives were just enabled: one START_MOTION (refused ones are not retried until the
+    // master disables and enables again).
+    if (mode) {
+      request(config_request_t::START_MOTION, *mode);
+      ++counters_.motions;
+      // Until the first command: hold still where the arm is.
+      last_command_ = rt::Command{};
+      if (mode == rt::ControlMode::kJointPosition) last_command_.values = from_array<Vector7>(before.q);
+    } else {
+      ++counters_.mixed_modes;
+    }
+  }
+  all_enabled_before_ = all_enabled;
+
+  if (server_.in_session()) {
+    const rt::ControlMode session = *server_.session();
+    if (!all_enabled || mode != session) {
+      rt::Command finish = last_command_;   // the master stopped the motion: libfranka's MotionFinished
+      finish.motion_finished = true;
+      send_command(session, finish);
+    } else if (command.complete) {
+      send_command(session, command_values(session, command));
+    }
+  }
+  server_.step(bridge::now_utime());
+  log_state();
+
+  const rt::RobotState& s = server_.emulator().state();
+  ArmState state;
+  for (int j = 0; j < kJoints; ++j)
+    state.joints[j] = JointMeasurement{s.q[j], s.q_d[j], s.dq[j], s.tau_J[j], s.tau_J_d[j], s.tau_ext_hat_filtered[j]};
+  state.errors = rt::ErrorSet(s.current_errors);
+  return state;
+}
+
+}  // namespace csp::can

@@ -1,0 +1,164 @@
+#!/usr/bin/python3
+"""Interop: the unmodified python-canopen (shared/vendor, MIT; its BaseNode402 CiA 402 master)
+drives `csp can serve` inside user-mode-linux: it loads CSP's EDS, maps the PDOs by SDO as a CiA
+302 master does, starts the nodes, walks the 402 state machine with its own `state` setter, sets
+the modes with its `op_mode` setter and moves the arm in CSP and then CST mode. Its cyclic part is
+a master's usual cycle thread: every RPDO, then one SYNC.
+
+  canopen_interop.py CSP VENDOR WORK
+"""
+import os
+import signal
+import struct
+import subprocess
+import sys
+import threading
+import time
+
+failures = []
+
+
+def check(condition, what):
+    print(("ok    " if condition else "FAIL  ") + what, flush=True)
+    if not condition:
+        failures.append(what)
+
+
+def main(csp, vendor, work):
+    sys.path.insert(0, os.path.join(vendor, "python-canopen"))
+    import canopen
+
+    network = canopen.Network()
+    network.connect(channel="vcan0", interface="socketcan")
+    emcy = []
+    nodes = []
+    for n in range(1, 8):
+        eds = os.path.join(work, "joint%d.eds" % n)
+        subprocess.run([csp, "can", "eds", "--node", str(n), "-o", eds], check=True)
+        node = canopen.BaseNode402(n, eds)
+        network.add_node(node)
+        # Timeouts for a kernel that is not real time (UML on a shared machine).
+        node.TIMEOUT_SWITCH_STATE_FINAL = node.TIMEOUT_SWITCH_STATE_SINGLE = 30.0
+        node.TIMEOUT_SWITCH_OP_MODE = node.TIMEOUT_CHECK_TPDO = 10.0
+        node.sdo.RESPONSE_TIMEOUT = 5.0
+        node.emcy.add_callback(lambda e, n=n: emcy.append((n, e.code)))
+        nodes.append(node)
+    out = open(os.path.join(work, "interop.out"), "w")
+    serve = subprocess.Popen([csp, "can", "serve", "--iface", "vcan0", "--duration", "1000"], stdout=out, stderr=subprocess.STDOUT)
+    states = [node.nmt.wait_for_heartbeat(60) for node in nodes]
+    check(states == ["PRE-OPERATIONAL"] * 7, "python-canopen: the seven nodes are up (heartbeats: %s)" % states)
+
+    # PDO mapping by SDO (COB-ID invalid, count 0, entries, count, COB-ID valid).
+    for node in nodes:
+        node.pdo.read()
+        rpdo, tpdo1, tpdo2 = node.rpdo[1], node.tpdo[1], node.tpdo[2]
+        rpdo.clear()
+        rpdo.add_variable(0x6040)   # controlword
+        rpdo.add_variable(0x607A)   # target position
+        rpdo.add_variable(0x6071)   # target torque
+        rpdo.trans_type, rpdo.enabled = 1, True
+        tpdo1.clear()
+        tpdo1.add_variable(0x6041)  # statusword
+        tpdo1.add_variable(0x6064)  # position actual value
+        tpdo1.trans_type, tpdo1.enabled = 1, True
+        tpdo2.clear()
+        tpdo2.add_variable(0x6061)  # modes of operation display
+        tpdo2.add_variable(0x606C)  # velocity actual value
+        tpdo2.trans_type, tpdo2.enabled = 1, True
+        for disabled in (2, 3, 4):
+            node.rpdo[disabled].enabled = False
+        node.pdo.save()
+        node.setup_402_state_machine(read_pdos=True)
+    check(all(n.rpdo[1].length == 64 for n in nodes), "RPDO1 remapped by SDO: controlword + target position + target torque (8 bytes)")
+
+    # The master's cycle thread: every RPDO1, then SYNC, then wait for the TPDOs; `on_cycle` sets
+    # the targets.
+    stop = threading.Event()
+    on_cycle = [lambda k: None]
+    cycles = [0]
+
+    def cycle_thread():
+        while not stop.is_set():
+            on_cycle[0](cycles[0])
+            last = nodes[6].tpdo[2]          # the last TPDO the drives send after a SYNC
+            answered = last.timestamp
+            for node in nodes:
+                node.rpdo[1].transmit()
+            network.sync.transmit()
+            # Lockstep: the next cycle once the drives answered this SYNC.
+            deadline = time.monotonic() + 10
+            while last.timestamp == answered and time.monotonic() < deadline:
+                time.sleep(0.0005)
+            cycles[0] += 1
+
+    network.nmt.state = "OPERATIONAL"
+    thread = threading.Thread(target=cycle_thread)
+    thread.start()
+
+    def wait_cycles(n):
+        end = cycles[0] + n
+        while cycles[0] < end and thread.is_alive():
+            time.sleep(0.01)
+
+    def position(node):
+        node.tpdo[1].wait_for_reception(10)
+        return node.tpdo_values[0x6064]
+
+    try:
+        wait_cycles(3)
+        # CSP: the targets start at the robot's desired position 0x6062 (q_d), where libfranka's
+        # motion generators start (the measured q may differ while the robot holds it).
+        start = [node.sdo[0x6062].raw for node in nodes]
+        for node, q in zip(nodes, start):
+            node.rpdo[1]["Target position"].raw = q
+            node.op_mode = "CYCLIC SYNCHRONOUS POSITION"
+        check(all(n.op_mode == "CYCLIC SYNCHRONOUS POSITION" for n in nodes), "op_mode CSP (0x6060 by SDO, 0x6061 by TPDO)")
+        for node in nodes:
+            node.state = "OPERATION ENABLED"
+        check(all(n.state == "OPERATION ENABLED" for n in nodes), "BaseNode402.state = OPERATION ENABLED on every node")
+        # Joint 1: +400 urad in 1 urad steps, one per cycle (inside libfranka's jerk limits).
+        moved_from = cycles[0]
+
+        def csp_cycle(k):
+            nodes[0].rpdo[1]["Target position"].raw = start[0] + min(max(k - moved_from, 0), 400)
+        on_cycle[0] = csp_cycle
+        wait_cycles(500)
+        q1 = position(nodes[0])
+        check(abs(q1 - (start[0] + 400)) < 50, "CSP: joint 1 followed +400 urad (at %+d urad)" % (q1 - start[0]))
+        check(not emcy, "no EMCY during the CSP motion: %s" % emcy)
+
+        # CST: disable operation (the motion finishes), switch the mode, enable, torque on joint 7.
+        for node in nodes:
+            node.state = "SWITCHED ON"
+            node.op_mode = "CYCLIC SYNCHRONOUS TORQUE"
+        check(all(n.op_mode == "CYCLIC SYNCHRONOUS TORQUE" for n in nodes), "op_mode CST")
+        on_cycle[0] = lambda k: None
+        for node in nodes:
+            node.rpdo[1]["Target torque"].raw = 0
+            node.state = "OPERATION ENABLED"
+        check(all(n.state == "OPERATION ENABLED" for n in nodes), "operation enabled in CST")
+        q7 = position(nodes[6])
+        started = cycles[0]
+
+        def cst_cycle(k):   # 0.1 N m on joint 7 (0x6076 = 500 mN m: 200 per mille), ramped over 50 cycles
+            nodes[6].rpdo[1]["Target torque"].raw = min(k - started, 50) * 4
+        on_cycle[0] = cst_cycle
+        wait_cycles(250)
+        moved = position(nodes[6]) - q7
+        check(moved > 1000, "CST: 0.1 N m turned joint 7 (%+d urad)" % moved)
+        check(not emcy, "no EMCY during the CST motion: %s" % emcy)
+    finally:
+        stop.set()
+        thread.join()
+        serve.send_signal(signal.SIGINT)
+        serve.wait(60)
+        network.disconnect()
+        out.close()
+        print(open(os.path.join(work, "interop.out")).read(), flush=True)
+    if failures:
+        print("%d check(s) failed" % len(failures))
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:4])

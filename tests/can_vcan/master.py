@@ -1,0 +1,421 @@
+#!/usr/bin/python3
+"""An independent CANopen master for the vcan test, on python-can only, written from the CiA 301
+(NMT, SDO, SYNC, PDO, EMCY, heartbeat) and CiA 402 (controlword, statusword masks) text, not
+from CSP's encoder. Runs inside user-mode-linux (tests/can_vcan/run_in_uml.sh) against
+`csp can serve`, which it starts itself once its own socket listens.
+
+  master.py session  CSP REFERENCE WORK   boot, identity, 402 walk, 1000 CST cycles compared with
+                                          the in-process emulator, RPDO silence -> EMCY + fault +
+                                          recovery; the session log re-simulated by csp replay
+  master.py badinput CSP WORK             wrong DLC, unknown COB-IDs, SDO errors, out-of-range
+                                          values, 1e5 frames; the cycle goes on, the log is complete
+"""
+import math
+import os
+import signal
+import struct
+import subprocess
+import sys
+import time
+
+import can
+
+NODES = range(1, 8)
+TORQUE_STEP = [3e-3] * 4 + [0.5e-3] * 3      # 0x6076 = 3000 / 500 mN m, per mille [N m]
+failures = []
+
+
+def check(condition, what):
+    print(("ok    " if condition else "FAIL  ") + what, flush=True)
+    if not condition:
+        failures.append(what)
+
+
+class SdoAbort(Exception):
+    def __init__(self, code):
+        super().__init__("SDO abort 0x%08X" % code)
+        self.code = code
+
+
+class Master:
+    def __init__(self, channel="vcan0"):
+        self.bus = can.interface.Bus(channel=channel, interface="socketcan")
+        self.emcy = []          # (node, code, register, byte 3) of every EMCY seen
+        self.heartbeats = {}    # node -> last state byte
+
+    def send(self, cob_id, data=b""):
+        self.bus.send(can.Message(arbitration_id=cob_id, data=bytes(data), is_extended_id=False))
+
+    def recv(self, timeout):
+        msg = self.bus.recv(timeout)
+        if msg is None or msg.is_extended_id or msg.is_remote_frame or msg.is_error_frame:
+            return msg
+        cob, data = msg.arbitration_id, bytes(msg.data)
+        if 0x081 <= cob <= 0x0FF and len(data) == 8:     # EMCY: code U16, error register U8, ...
+            self.emcy.append((cob - 0x80, data[0] | data[1] << 8, data[2], data[3]))
+        if 0x701 <= cob <= 0x77F and len(data) == 1:     # heartbeat / boot-up
+            self.heartbeats[cob - 0x700] = data[0]
+        return msg
+
+    def wait_for(self, wanted, timeout=5.0):
+        """Frames until `wanted(msg)` is true; the matching message, or None after `timeout`."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            msg = self.recv(max(0.0, deadline - time.monotonic()))
+            if msg is not None and wanted(msg):
+                return msg
+        return None
+
+    # --- SDO client (CiA 301 7.2.4.3): expedited and segmented upload, expedited download.
+    def _sdo_request(self, node, request):
+        self.send(0x600 + node, request)
+        msg = self.wait_for(lambda m: m.arbitration_id == 0x580 + node)
+        if msg is None:
+            raise TimeoutError("no SDO answer from node %d" % node)
+        data = bytes(msg.data)
+        if data[0] == 0x80:
+            raise SdoAbort(struct.unpack_from("<I", data, 4)[0])
+        return data
+
+    def upload(self, node, index, sub):
+        data = self._sdo_request(node, struct.pack("<BHB4x", 0x40, index, sub))
+        scs = data[0] >> 5
+        assert scs == 2, "upload initiate answer 0x%02X" % data[0]
+        if data[0] & 0x02:                                   # expedited
+            size = 4 - ((data[0] >> 2) & 3) if data[0] & 0x01 else 4
+            return data[4:4 + size]
+        size = struct.unpack_from("<I", data, 4)[0]          # segmented: size indicated
+        value, toggle = b"", 0
+        while True:
+            seg = self._sdo_request(node, bytes([0x60 | toggle << 4]) + bytes(7))
+            assert seg[0] >> 5 == 0 and (seg[0] >> 4) & 1 == toggle, "segment 0x%02X" % seg[0]
+            value += seg[1:8 - ((seg[0] >> 1) & 7)]
+            if seg[0] & 1:
+                assert len(value) == size
+                return value
+            toggle ^= 1
+
+    def download(self, node, index, sub, value: bytes):
+        n = len(value)
+        command = 0x23 | (4 - n) << 2                        # expedited, size indicated
+        answer = self._sdo_request(node, struct.pack("<BHB", command, index, sub) + value + bytes(4 - n))
+        assert answer[0] == 0x60, "download answer 0x%02X" % answer[0]
+
+    # --- the cycle: RPDOs, then SYNC, then the 14 TPDOs of that SYNC.
+    def cycle(self, rpdos, timeout=5.0):
+        for cob, data in rpdos:
+            self.send(cob, data)
+        self.send(0x080)
+        got = {}
+        deadline = time.monotonic() + timeout
+        while len(got) < 14 and time.monotonic() < deadline:
+            msg = self.recv(max(0.0, deadline - time.monotonic()))
+            if msg is not None and (0x181 <= msg.arbitration_id <= 0x187 or 0x281 <= msg.arbitration_id <= 0x287):
+                got[msg.arbitration_id] = bytes(msg.data)
+        if len(got) < 14:
+            raise TimeoutError("SYNC answered by %d of 14 TPDOs" % len(got))
+        return got
+
+
+def statuswords(tpdos):
+    return [struct.unpack_from("<H", tpdos[0x180 + n])[0] for n in NODES]
+
+
+def positions(tpdos):
+    return [struct.unpack_from("<i", tpdos[0x180 + n], 2)[0] for n in NODES]
+
+
+def velocities(tpdos):
+    return [struct.unpack_from("<i", tpdos[0x280 + n])[0] for n in NODES]
+
+
+def rpdo1(controlword, torques=(0,) * 7):
+    return [(0x200 + n, struct.pack("<Hh", controlword, torques[n - 1])) for n in NODES]
+
+
+def start_serve(csp, work, name, *extra):
+    out = open(os.path.join(work, name + ".out"), "w")
+    return subprocess.Popen([csp, "can", "serve", "--iface", "vcan0", "--duration", "1000", *extra], stdout=out, stderr=subprocess.STDOUT)
+
+
+def stop_serve(serve, work, name):
+    serve.send_signal(signal.SIGINT)
+    check(serve.wait(timeout=60) == 0, "%s: csp can serve ends cleanly on SIGINT" % name)
+    with open(os.path.join(work, name + ".out")) as f:
+        text = f.read()
+    print(text, flush=True)
+    return text
+
+
+def boot(master, csp, work, name, *extra):
+    serve = start_serve(csp, work, name, *extra)
+    booted = set()
+    while len(booted) < 7:
+        msg = master.wait_for(lambda m: 0x701 <= m.arbitration_id <= 0x707 and bytes(m.data) == b"\x00", timeout=60)
+        if msg is None:
+            break
+        booted.add(msg.arbitration_id - 0x700)
+    check(booted == set(NODES), "boot-up 701#00 .. 707#00 from the seven nodes")
+    return serve
+
+
+def profile(k):
+    """Target torques of cycle k, per mille: sines well inside libfranka's torque-rate limit."""
+    amplitude = [1.0] * 4 + [0.1] * 3
+    return [round(amplitude[j] * math.sin(2 * math.pi * (1.0 + 0.3 * j) * k * 1e-3) / TORQUE_STEP[j]) for j in range(7)]
+
+
+def session(csp, reference, work):
+    master = Master()
+    log = os.path.join(work, "session.lcmlog")
+    serve = boot(master, csp, work, "session", "--log", log)
+
+    master.send(0x000, [0x01, 0x00])                          # NMT start remote node, all nodes
+    master.wait_for(lambda m: False, timeout=0.5)             # heartbeats (100 ms) show the new state
+    check(all(master.heartbeats.get(n) == 0x05 for n in NODES), "NMT start: heartbeats 70n#05 (operational)")
+
+    check(all(master.upload(n, 0x1000, 0) == struct.pack("<I", 0x00020192) for n in NODES), "0x1000 device type 0x00020192 (CiA 402 servo drive)")
+    check(all(master.upload(n, 0x6502, 0) == struct.pack("<I", 0x380) for n in NODES), "0x6502 supported drive modes 0x380 (CSP, CSV, CST)")
+    identity = [struct.unpack("<I", master.upload(1, 0x1018, s))[0] for s in (1, 2, 3, 4)]
+    check(identity == [0, 0x00435350, 0x00010000, 1], "0x1018 identity of node 1: %s" % [hex(v) for v in identity])
+    name = master.upload(3, 0x1008, 0)
+    check(name == b"CSP emulated Franka joint drive", "0x1008 by segmented upload: %r" % name)
+    try:
+        master.upload(1, 0x1234, 0)
+        check(False, "SDO to a missing object aborts")
+    except SdoAbort as e:
+        check(e.code == 0x06020000, "SDO to a missing object: abort 0x06020000 (got 0x%08X)" % e.code)
+
+    # CiA 402 walk by RPDO1: an RPDO latched at SYNC k shows in the TPDO of SYNC k+1.
+    syncs = 0
+    expected = {0x06: 0x21, 0x07: 0x23, 0x0F: 0x27}          # statusword under mask 0x6F
+    start = None
+    tpdos = None
+    for controlword, state in expected.items():
+        master.cycle(rpdo1(controlword))
+        if controlword == 0x0F:
+            start = syncs                                     # this SYNC's cycle starts the motion
+        syncs += 1
+        tpdos = master.cycle(rpdo1(controlword))
+        syncs += 1
+        check(all(s & 0x6F == state for s in statuswords(tpdos)), "controlword 0x%02X -> statusword 0x%02X" % (controlword, state))
+    # The cycles since the start, as the reference must run them: zero torque from the walk's RPDOs.
+    commands = [[0] * 7, [0] * 7]
+
+    # 1000 CST cycles with a torque profile; TPDOs of SYNC k+1 = the state after cycle k.
+    trajectory = []
+    for k in range(1000):
+        torques = profile(k)
+        commands.append(torques)
+        tpdos = master.cycle(rpdo1(0x0F, torques))
+        syncs += 1
+        trajectory.append(positions(tpdos) + velocities(tpdos))
+    tpdos = master.cycle(rpdo1(0x0F, profile(1000)))          # the state after the last profile cycle
+    syncs += 1
+    commands.append(profile(1000))
+    trajectory.append(positions(tpdos) + velocities(tpdos))
+    check(all(s & 0x6F == 0x27 for s in statuswords(tpdos)), "1000 CST cycles: still operation enabled")
+    moved = max(abs(row[0] - trajectory[0][0]) for row in trajectory)
+    check(moved > 1000, "the torque profile moved joint 1 (%d urad)" % moved)
+
+    with open(os.path.join(work, "commands.txt"), "w") as f:
+        f.write("start %d\n" % start)
+        for row in commands[:-1]:
+            f.write(" ".join(map(str, row)) + "\n")
+    expected_rows = subprocess.run([reference, os.path.join(work, "commands.txt")], check=True, capture_output=True, text=True).stdout.split("\n")
+    expected_rows = [list(map(int, r.split())) for r in expected_rows if r.strip()]
+    # The reference's row i is the state after cycle start + i, sent in the TPDOs of SYNC
+    # start + i + 1; the trajectory begins with the TPDOs of SYNC start + 2.
+    wire = expected_rows[1:]
+    same = sum(1 for a, b in zip(wire, trajectory) if a == b)
+    check(len(wire) == len(trajectory) and same == len(trajectory),
+          "CST trajectory on the wire equals the in-process emulator bit for bit (%d of %d cycles, 7 positions + 7 velocities)" % (same, len(trajectory)))
+
+    # RPDO silence: SYNCs without RPDOs; the 20th lost cycle is communication_constraints_violation.
+    master.emcy.clear()
+    lost = 0
+    while lost < 25 and not master.emcy:
+        tpdos = master.cycle([])
+        lost += 1
+        master.wait_for(lambda m: 0x081 <= m.arbitration_id <= 0x087, timeout=0.05)   # the cycle's EMCY, if any
+    master.wait_for(lambda m: False, timeout=0.2)
+    codes = {(node, code) for node, code, _, _ in master.emcy}
+    check(lost == 20, "EMCY after 20 silent cycles (after %d)" % lost)
+    check(codes == {(n, 0x8250) for n in NODES}, "EMCY 0x8250 (RPDO timeout = communication_constraints_violation) from every node: %s" % sorted(codes))
+    check(all(node_reg & 0x11 == 0x11 for _, _, node_reg, _ in master.emcy), "EMCY error register: generic + communication")
+    tpdos = master.cycle([])
+    check(all(s & 0x4F == 0x0F for s in statuswords(tpdos)), "every drive in 402 fault reaction active (statusword & 0x4F = 0x0F)")
+    tpdos = master.cycle([])
+    check(all(s & 0x4F == 0x08 for s in statuswords(tpdos)), "then in 402 fault (statusword & 0x4F = 0x08)")
+    check(master.upload(4, 0x2002, 32) == b"\x01", "0x2002 sub 32 (communication_constraints_violation) = 1")
+    # Fault reset: rising edge of controlword bit 7 -> automatic error recovery -> switch on disabled.
+    master.emcy.clear()
+    master.cycle(rpdo1(0x80))
+    tpdos = master.cycle(rpdo1(0x00))
+    check(all(s & 0x4F == 0x40 for s in statuswords(tpdos)), "fault reset -> switch on disabled (statusword & 0x4F = 0x40)")
+    check({(n, c) for n, c, _, _ in master.emcy} == {(n, 0x0000) for n in NODES}, "EMCY 0x0000 (error reset) from every node")
+    check(master.upload(4, 0x2002, 32) == b"\x00", "error recovered: 0x2002 sub 32 = 0")
+    # Enable again and hold: the robot moves again after the recovery.
+    for controlword in (0x06, 0x07, 0x0F, 0x0F):
+        tpdos = master.cycle(rpdo1(controlword))
+    check(all(s & 0x6F == 0x27 for s in statuswords(tpdos)), "operation enabled again after the recovery")
+    text = stop_serve(serve, work, "session")
+    check("motions 2" in text and "error recoveries 1" in text, "serve counted 2 motions and 1 error recovery")
+
+    replay = subprocess.run([csp, "replay", log], capture_output=True, text=True)
+    print(replay.stdout + replay.stderr, flush=True)
+    check(replay.returncode == 0 and "bit for bit" in replay.stdout, "csp replay re-simulates the CAN session log bit for bit")
+
+
+def badinput(csp, work):
+    # The flood's COB-ID 0x3FF (TPDO3 of node 127: no node of CSP's) is filtered out here, so
+    # that this master keeps up while CSP reads the 1e5 frames.
+    master = Master()
+    master.bus.set_filters([{"can_id": base, "can_mask": 0x780} for base in (0x080, 0x180, 0x280, 0x580, 0x700)])
+    log = os.path.join(work, "badinput.lcmlog")
+    serve = boot(master, csp, work, "badinput", "--log", log)
+    master.send(0x000, [0x01, 0x00])
+
+    master.emcy.clear()
+    master.send(0x202, [0x0F])                                # RPDO1 of node 2 with 1 byte of its 4
+    master.wait_for(lambda m: m.arbitration_id == 0x082, timeout=2)
+    check((2, 0x8210) in [(n, c) for n, c, _, _ in master.emcy], "RPDO shorter than its mapping: EMCY 0x8210 (PDO length)")
+    master.send(0x3FF, b"\x01\x02")                            # unknown COB-IDs: ignored, no answer
+    master.send(0x6FF, bytes(8))
+    check(master.wait_for(lambda m: m.arbitration_id == 0x5FF, timeout=0.3) is None, "SDO to a node that is not there: no answer")
+
+    def abort_code(node, command, index, sub, value):
+        try:
+            master._sdo_request(node, struct.pack("<BHB", command, index, sub) + value)
+            return None
+        except SdoAbort as e:
+            return e.code
+    check(abort_code(1, 0x2F, 0x6060, 0, bytes([3, 0, 0, 0])) in (0x06090030, 0x06090031, 0x06090032), "0x6060 = 3 (no such mode): abort 0x0609003x")
+    check(abort_code(1, 0x2B, 0x6072, 0, struct.pack("<H", 60000) + bytes(2)) == 0x06090031, "0x6072 max torque beyond tau_max: abort 0x06090031")
+    check(abort_code(1, 0x23, 0x1000, 0, bytes(4)) == 0x06010002, "write to the const 0x1000: abort 0x06010002")
+    check(abort_code(1, 0x23, 0x6040, 0, bytes(4)) == 0x06070012, "4 bytes to the U16 controlword: abort 0x06070012")
+
+    # An out-of-range target torque: limited to 0x6072, a jump all the same -> the robot's reflex.
+    for controlword in (0x06, 0x07, 0x0F, 0x0F):
+        master.cycle(rpdo1(controlword))
+    master.emcy.clear()
+    master.cycle(rpdo1(0x0F, [0x7FFF, 0, 0, 0, 0, 0, 0]))
+    master.wait_for(lambda m: False, timeout=0.3)
+    check({(n, c) for n, c, _, _ in master.emcy} >= {(n, 0xFF1E) for n in NODES},
+          "target torque 0x7FFF: limited, still a jump: EMCY 0xFF1E controller_torque_discontinuity from every node")
+    master.cycle(rpdo1(0x00))
+    tpdos = master.cycle(rpdo1(0x80))
+    tpdos = master.cycle(rpdo1(0x00))
+    check(all(s & 0x4F == 0x40 for s in statuswords(tpdos)), "fault reset after the reflex -> switch on disabled")
+
+    # A flood of 1e5 frames while the arm is in a CST motion: every cycle is answered, none lost.
+    for controlword in (0x06, 0x07, 0x0F):
+        master.cycle(rpdo1(controlword))
+    flood = subprocess.Popen(["cangen", "vcan0", "-I", "3FF", "-L", "8", "-D", "i", "-g", "0", "-n", "100000"])
+    flood_cycles = 0
+    while flood.poll() is None:
+        tpdos = master.cycle(rpdo1(0x0F), timeout=120)   # CSP reads the flood's frames queued before each SYNC
+        flood_cycles += 1
+    for _ in range(20):
+        tpdos = master.cycle(rpdo1(0x0F))
+    check(flood.returncode == 0, "cangen sent 1e5 frames on COB-ID 0x3FF")
+    check(all(s & 0x6F == 0x27 for s in statuswords(tpdos)), "after the flood (%d cycles during it): still operation enabled" % flood_cycles)
+    text = stop_serve(serve, work, "badinput")
+    lost = int(text.split("lost commands ")[1].split()[0])
+    ignored = int(text.split("ignored frames ")[1].split(",")[0])
+    check(lost == 0, "no command lost during the flood (lost commands %d)" % lost)
+    check(ignored >= 10000, "CSP counted %d ignored frames (the flood's 100000 and 2 unknown COB-IDs; any missing ones overflowed its socket's queue)" % ignored)
+    replay = subprocess.run([csp, "replay", log], capture_output=True, text=True)
+    print(replay.stdout + replay.stderr, flush=True)
+    check(replay.returncode == 0 and "bit for bit" in replay.stdout, "the log of the bad-input session is complete: csp replay bit for bit")
+
+
+def busload(work):
+    """canbusload's worst-case figures (summed over its 1 s lines) vs csp can serve's own count."""
+    frames = bits = 0
+    for line in open(os.path.join(work, "busload.txt")):
+        fields = line.split()
+        if fields and fields[0] == "vcan0@1000000":
+            frames += int(fields[1])
+            bits += int(fields[2])
+    text = open(os.path.join(work, "session.out")).read()
+    csp = text.split("vcan0 (joints 1,2,3,4,5,6,7): ")[1]
+    csp_frames, csp_bits = int(csp.split(" frames")[0]), int(csp.split("frames, ")[1].split(" bits")[0])
+    check(frames > 10000 and (frames, bits) == (csp_frames, csp_bits),
+          "canbusload: %d frames, %d bits; csp can serve: %d frames, %d bits (worst-case stuffing)" % (frames, bits, csp_frames, csp_bits))
+
+
+def replay_compare(work):
+    """The TPDOs of a canplayer replay of the master's frames equal those of the session."""
+    def tpdos(path):
+        out = []
+        for line in open(os.path.join(work, path)):
+            frame = line.split()[2]
+            if frame[:3] in ("181", "182", "183", "184", "185", "186", "187", "281", "282", "283", "284", "285", "286", "287"):
+                out.append(frame)
+        return out
+    original, replayed = tpdos("session.candump"), tpdos("replay.candump")
+    first = next((i for i, (a, b) in enumerate(zip(original, replayed)) if a != b), None)
+    check(len(replayed) >= 14 * 90 and first is None,
+          "candump -L -> canplayer -> the same TPDO stream (%d TPDOs; first difference: %s)" %
+          (len(replayed), None if first is None else (first, original[first], replayed[first])))
+
+
+def master_frames(work, syncs):
+    """The master's frames of the session (NMT, SYNC, RPDOs, SDO requests) up to its n-th SYNC."""
+    with open(os.path.join(work, "session.candump")) as f, open(os.path.join(work, "master.candump"), "w") as out:
+        count = 0
+        for line in f:
+            cob = int(line.split()[2].split("#")[0], 16)
+            if cob in (0x000, 0x080) or cob & 0x780 in (0x200, 0x300, 0x400, 0x500, 0x600):   # NMT, SYNC, RPDO1-4, SDO requests
+                out.write(line)
+                count += cob == 0x080
+                if count == syncs:
+                    break
+
+
+def split(work):
+    """With --split 4 each node's frames are on its own bus: joints 1-2 vcan0, 3-4 vcan1, 5-6 vcan2, 7 vcan3."""
+    bus_of_node = {1: "vcan0", 2: "vcan0", 3: "vcan1", 4: "vcan1", 5: "vcan2", 6: "vcan2", 7: "vcan3"}
+    wrong, tpdos, syncs = [], 0, {}
+    for line in open(os.path.join(work, "split.candump")):
+        _, iface, frame = line.split()
+        cob = int(frame.split("#")[0], 16)
+        if cob == 0x080:
+            syncs[iface] = syncs.get(iface, 0) + 1
+        elif cob & 0x7F in bus_of_node and cob & 0x780 in (0x180, 0x280, 0x700):
+            tpdos += cob & 0x780 != 0x700
+            if bus_of_node[cob & 0x7F] != iface:
+                wrong.append(line.strip())
+    check(not wrong and tpdos > 100, "every node's TPDOs and heartbeats on its own bus (%d TPDOs; misplaced: %s)" % (tpdos, wrong[:3]))
+    check(len(set(syncs.values())) == 1 and sorted(syncs) == ["vcan0", "vcan1", "vcan2", "vcan3"], "CSP's SYNC on all four buses: %s" % syncs)
+    text = open(os.path.join(work, "split.out")).read()
+    loads = [float(part.split(" %")[0]) for part in text.split("1 kHz: ")[1:]]
+    check(len(loads) == 4 and all(0 < load < 100 for load in loads), "load per bus at 1 Mbit/s under 100 %%: %s" % loads)
+
+
+def main():
+    command = sys.argv[1]
+    if command == "session":
+        session(*sys.argv[2:5])
+    elif command == "badinput":
+        badinput(*sys.argv[2:4])
+    elif command == "busload":
+        busload(sys.argv[2])
+    elif command == "master-frames":
+        master_frames(sys.argv[2], int(sys.argv[3]))
+    elif command == "split":
+        split(sys.argv[2])
+    elif command == "replay-compare":
+        replay_compare(sys.argv[2])
+    else:
+        raise SystemExit("unknown command " + command)
+    if failures:
+        print("%d check(s) failed:" % len(failures))
+        for f in failures:
+            print("  " + f)
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,351 @@
+// The drives in front of the RobotServer (bridge/can server_arm, docs/can.md): Franka's semantics
+// on top of CiA 402, checked against an in-process Emulator given the same quantized commands
+// (bit for bit), against `csp replay`'s re-simulation of the session log, and against the
+// physics (gravity). Frames are written byte by byte from the CiA 301/402 text.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "csp/bridge/replay.hpp"
+#include "csp/can/serve.hpp"
+#include "csp/can/server_arm.hpp"
+#include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/arrays.hpp"
+
+namespace csp::can {
+namespace {
+
+std::string temp_log(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("csp-can-serve-test-" + std::to_string(getpid()) + "-" + name)).string();
+}
+
+Frame frame(uint32_t id, std::initializer_list<uint8_t> bytes) {
+  Frame f;
+  f.id = id;
+  f.dlc = static_cast<uint8_t>(bytes.size());
+  std::copy(bytes.begin(), bytes.end(), f.data.begin());
+  return f;
+}
+
+// Per-mille torque steps of joint j (0x6076: 3000 mN m joints 1-4, 500 mN m joints 5-7).
+double torque_step(int j) { return j < 4 ? 3e-3 : 0.5e-3; }
+
+// The ServerArm, recording the emulator's joint positions after each cycle.
+class RecordingArm : public Arm {
+ public:
+  explicit RecordingArm(const std::string& log) : arm(rt::load_scenario(rt::default_scenario_path()), log, [](const std::string&) {}) {}
+  ArmState cycle(const ArmCommand& command) override {
+    const ArmState state = arm.cycle(command);
+    q.push_back(arm.server().emulator().state().q);
+    return state;
+  }
+  ServerArm arm;
+  std::vector<std::array<double, 7>> q;
+};
+
+class CanServe : public ::testing::Test {
+ protected:
+  std::string log = temp_log(::testing::UnitTest::GetInstance()->current_test_info()->name());
+  RecordingArm arm{log};
+  DriveBus bus{BusSettings{}, arm};
+
+  ~CanServe() override { std::filesystem::remove(log); }
+
+  const rt::Emulator& emulator() const { return arm.arm.server().emulator(); }
+  void sync() { bus.receive(frame(kSync, {})); }
+  void rpdo1(int node, uint16_t controlword, int16_t torque) {
+    bus.receive(frame(kRpdo1 + node, {uint8_t(controlword), uint8_t(controlword >> 8), uint8_t(torque), uint8_t(uint16_t(torque) >> 8)}));
+  }
+  void rpdo2(int node, int32_t position) {
+    const auto p = static_cast<uint32_t>(position);
+    bus.receive(frame(kRpdo2 + node, {uint8_t(p), uint8_t(p >> 8), uint8_t(p >> 16), uint8_t(p >> 24), 0, 0}));
+  }
+  void controlword_all(uint16_t controlword) {
+    for (int n = 1; n <= 7; ++n) rpdo1(n, controlword, 0);
+    sync();
+  }
+  // NMT start all, then shutdown / switch on / enable operation by RPDO1.
+  void enable() {
+    bus.receive(frame(kNmt, {0x01, 0x00}));
+    for (uint16_t cw : {0x06, 0x07, 0x0F}) controlword_all(cw);
+  }
+  int statusword(int joint) const { return static_cast<int>(bus.node(joint).value(0x6041, 0)); }
+  // EMCY frames (0x80 + node) with `code` in the frames sent since the last clear.
+  int emcy_count(uint16_t code) const {
+    int n = 0;
+    for (const Frame& f : bus.sent())
+      if (f.id > 0x80 && f.id <= 0x87 && f.dlc == 8 && get_le(f.data.data(), 2) == code) ++n;
+    return n;
+  }
+};
+
+// The torque profile of the tests: smooth sines well inside libfranka's torque-rate limit.
+int16_t profile(int joint, int cycle) {
+  const double amplitude = joint < 4 ? 1.0 : 0.1;   // [N m]
+  const double tau = amplitude * std::sin(2.0 * M_PI * (1.0 + 0.3 * joint) * cycle * 1e-3);
+  return static_cast<int16_t>(std::lround(tau / torque_step(joint)));
+}
+
+TEST_F(CanServe, CstSessionEqualsTheInProcessEmulatorBitForBitAndReplaysFromItsLog) {
+  enable();
+  const std::size_t idle_cycles = arm.q.size();   // the walk's cycles, before the motion
+  ASSERT_EQ(statusword(0) & 0x6F, 0x27);
+  constexpr int kCycles = 1000;
+  std::vector<Vector7> commands;
+  for (int k = 0; k < kCycles; ++k) {
+    Vector7 tau;
+    for (int n = 1; n <= 7; ++n) {
+      rpdo1(n, 0x0F, profile(n - 1, k));
+      tau[n - 1] = profile(n - 1, k) * torque_step(n - 1);
+    }
+    commands.push_back(tau);
+    sync();
+  }
+  EXPECT_TRUE(emulator().in_motion()) << emulator().reflex_reason() << " " << emulator().counters().motion_cycles;
+  EXPECT_EQ(arm.arm.counters().motions, 1u);
+  EXPECT_EQ(emulator().counters().lost_commands, 0u);
+
+  // The same quantized commands, in process: the RPDOs latched at SYNC k are the command of cycle k.
+  rt::Emulator reference(rt::load_scenario(rt::default_scenario_path()).emulator);
+  // The SYNC that latched "enable operation" started the motion, with the zero torque of the
+  // walk's last RPDO1 as its first command.
+  for (std::size_t k = 0; k + 1 < idle_cycles; ++k) reference.step(nullptr);
+  reference.start_motion(rt::ControlMode::kTorque);
+  const rt::Command zero;
+  reference.step(&zero);
+  int differing = 0;
+  double moved = 0.0;
+  for (int k = 0; k < kCycles; ++k) {
+    rt::Command c;
+    c.values = commands[k];
+    reference.step(&c);
+    const auto& q = arm.q[idle_cycles + k];
+    if (std::memcmp(q.data(), reference.state().q.data(), sizeof(double) * 7) != 0) ++differing;
+    moved = std::max(moved, std::abs(q[0] - arm.q[idle_cycles - 1][0]));
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_GT(moved, 1e-3);   // the profile really moved the arm
+
+  // The session log re-simulates bit for bit.
+  arm.arm.log()->flush();
+  const bridge::ResimulationReport replay = bridge::resimulate(log);
+  EXPECT_TRUE(replay.identical()) << replay.first_difference;
+  EXPECT_EQ(replay.states, arm.q.size() + 1);
+}
+
+
+TEST_F(CanServe, TwentyCyclesWithoutRpdoAreCommunicationConstraintsViolationOnEveryJointAndFaultResetRecovers) {
+  enable();
+  for (int k = 0; k < 19; ++k) sync();   // 19 cycles lost: the robot extrapolates
+  EXPECT_TRUE(emulator().in_motion());
+  bus.clear_sent();
+  sync();   // the 20th
+  EXPECT_FALSE(emulator().in_motion());
+  EXPECT_TRUE(rt::has(emulator().state().current_errors, rt::Error::communication_constraints_violation));
+  EXPECT_EQ(emcy_count(0x8250), 7);
+  for (int j = 0; j < 7; ++j) {
+    EXPECT_EQ(statusword(j) & 0x4F, 0x0F) << "joint " << j + 1;   // fault reaction active (CiA 402 mask 0x4F)
+    EXPECT_EQ(bus.node(j).value(0x2002, 32), 1);                   // sub 32 = error 31
+    EXPECT_EQ(bus.node(j).value(0x1001, 0) & 0x11, 0x11);          // generic + communication
+  }
+  // Fault reaction active lasts the cycle the robot brakes in, then fault.
+  controlword_all(0x00);
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(statusword(j) & 0x4F, 0x08) << "joint " << j + 1;
+  // Fault reset (rising edge of controlword bit 7) = automatic error recovery.
+  bus.clear_sent();
+  controlword_all(0x80);
+  EXPECT_FALSE(bool(emulator().state().current_errors));
+  EXPECT_EQ(arm.arm.counters().recoveries, 1u);
+  EXPECT_EQ(emcy_count(0x0000), 7);   // error reset
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(statusword(j) & 0x4F, 0x40) << "joint " << j + 1;   // switch on disabled
+  // And the arm can be enabled again for a new motion.
+  for (uint16_t cw : {0x06, 0x07, 0x0F}) controlword_all(cw);
+  EXPECT_TRUE(emulator().in_motion());
+  EXPECT_EQ(arm.arm.counters().motions, 2u);
+}
+
+TEST_F(CanServe, ATorqueJumpIsControllerTorqueDiscontinuityOnEveryJoint) {
+  enable();
+  bus.clear_sent();
+  for (int n = 1; n <= 7; ++n) rpdo1(n, 0x0F, n == 1 ? 20000 : 0);   // 60 N m in one millisecond
+  sync();
+  EXPECT_TRUE(rt::has(emulator().state().current_errors, rt::Error::controller_torque_discontinuity));
+  EXPECT_EQ(emcy_count(0xFF1E), 7);
+  sync();
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(statusword(j) & 0x4F, 0x08) << "joint " << j + 1;
+}
+
+TEST_F(CanServe, CspFollowsTheTargetPositionLikeTheInProcessJointPositionMode) {
+  bus.receive(frame(kNmt, {0x01, 0x00}));
+  std::array<int32_t, 7> start{};
+  for (int n = 1; n <= 7; ++n) bus.receive(frame(kRpdo4 + n, {kModeCsp}));
+  for (uint16_t cw : {0x06, 0x07}) controlword_all(cw);
+  const std::size_t idle_cycles = arm.q.size();
+  // Enable and the first targets in the same cycle: the start pose q_d (0x6062), in 1 urad steps.
+  for (int n = 1; n <= 7; ++n) {
+    start[n - 1] = static_cast<int32_t>(bus.node(n - 1).value(0x6062, 0));
+    rpdo2(n, start[n - 1]);
+  }
+  controlword_all(0x0F);
+  ASSERT_TRUE(emulator().in_motion());
+  EXPECT_EQ(*arm.arm.server().session(), rt::ControlMode::kJointPosition);
+  // Joint 4 follows a smooth rest-to-rest move of 0.1 rad over 2 s (1 - cos).
+  std::vector<Vector7> targets;
+  constexpr int kCycles = 2000;
+  for (int k = 1; k <= kCycles; ++k) {
+    Vector7 q;
+    for (int n = 1; n <= 7; ++n) {
+      const double offset = n == 4 ? 0.05 * (1.0 - std::cos(M_PI * k / kCycles)) : 0.0;
+      const auto raw = static_cast<int32_t>(start[n - 1] + std::lround(offset * 1e6));
+      rpdo2(n, raw);
+      rpdo1(n, 0x0F, 0);
+      q[n - 1] = raw * 1e-6;
+    }
+    targets.push_back(q);
+    sync();
+  }
+  ASSERT_TRUE(emulator().in_motion()) << emulator().reflex_reason();
+  EXPECT_NEAR(emulator().state().q[3], start[3] * 1e-6 + 0.1, 1e-3);
+
+  rt::Emulator reference(rt::load_scenario(rt::default_scenario_path()).emulator);
+  for (std::size_t k = 0; k < idle_cycles; ++k) reference.step(nullptr);
+  reference.start_motion(rt::ControlMode::kJointPosition);
+  rt::Command first;
+  for (int j = 0; j < 7; ++j) first.values[j] = start[j] * 1e-6;
+  reference.step(&first);
+  for (int k = 0; k < kCycles; ++k) {
+    rt::Command c;
+    c.values = targets[k];
+    reference.step(&c);
+  }
+  EXPECT_EQ(std::memcmp(reference.state().q.data(), emulator().state().q.data(), sizeof(double) * 7), 0);
+  // Leaving operation enabled finishes the motion (no reflex).
+  controlword_all(0x07);
+  sync();
+  EXPECT_FALSE(emulator().in_motion());
+  EXPECT_FALSE(bool(emulator().state().current_errors)) << emulator().reflex_reason();
+}
+
+// The master's torque that holds the arm against gravity (the robot's own model, quantized).
+std::array<int16_t, 7> holding_torque(const rt::Emulator& emulator) {
+  Data data;
+  Vector7 g;
+  gravity_torque(emulator.internal_model(), data, from_array<Vector7>(emulator.state().q), g);
+  std::array<int16_t, 7> raw{};
+  for (int j = 0; j < 7; ++j) raw[j] = static_cast<int16_t>(std::lround(g[j] / torque_step(j)));
+  return raw;
+}
+
+// Holds the arm for 500 cycles, by the robot's gravity compensation (0x2000 = 1, zero torque) or
+// by the master's torque (0x2000 = 0, g(q) sent); returns the final joint positions.
+std::array<double, 7> hold(bool robot_compensates) {
+  RecordingArm arm("");
+  DriveBus bus{BusSettings{}, arm};
+  const rt::Emulator& emulator = arm.arm.server().emulator();
+  if (!robot_compensates) {
+    // 0x2000 = 0 by SDO (expedited download of 1 byte, 0x2F) on every node: the answer is 0x60.
+    for (int n = 1; n <= 7; ++n) {
+      bus.clear_sent();
+      bus.receive(frame(kSdoRx + n, {0x2F, 0x00, 0x20, 0x00, 0x00, 0, 0, 0}));
+      EXPECT_EQ(bus.sent().at(0).data[0], 0x60);
+    }
+  }
+  bus.receive(frame(kNmt, {0x01, 0x00}));
+  for (int k = 0; k < 503; ++k) {
+    const auto g = holding_torque(emulator);
+    for (int n = 1; n <= 7; ++n) {
+      const uint16_t cw = k == 0 ? 0x06 : k == 1 ? 0x07 : 0x0F;
+      const int16_t torque = robot_compensates ? 0 : g[n - 1];
+      bus.receive(frame(kRpdo1 + n, {uint8_t(cw), uint8_t(cw >> 8), uint8_t(torque), uint8_t(uint16_t(torque) >> 8)}));
+    }
+    bus.receive(frame(kSync, {}));
+  }
+  EXPECT_TRUE(emulator.in_motion()) << emulator.reflex_reason();
+  return emulator.state().q;
+}
+
+TEST(CanServeGravity, WithoutTheRobotsCompensationTheMastersTorqueHoldsTheArmAsWellAsTheRobotDoes) {
+  const std::array<double, 7> by_robot = hold(true), by_master = hold(false);
+  // The difference: the master's quantization (3 / 0.5 mN m) and its one cycle of latency.
+  for (int j = 0; j < 7; ++j) EXPECT_NEAR(by_master[j], by_robot[j], 1e-3) << "joint " << j + 1;
+}
+
+TEST_F(CanServe, WithTheRobotsGravityCompensationTheSameTorqueIsAJump) {
+  // 0x2000 = 1 (default): the robot adds gravity itself, so a master sending it too commands a
+  // jump of g(q) in the first cycle.
+  bus.receive(frame(kNmt, {0x01, 0x00}));
+  for (uint16_t cw : {0x06, 0x07, 0x0F}) {
+    const auto g = holding_torque(emulator());
+    for (int n = 1; n <= 7; ++n) rpdo1(n, cw, g[n - 1]);
+    sync();
+  }
+  EXPECT_TRUE(rt::has(emulator().state().current_errors, rt::Error::controller_torque_discontinuity));
+}
+
+// The example controllers' law (bridge/examples/can_joint_impedance.*) on the in-memory bus with
+// the bus's latency: the torque answers the TPDOs of the previous SYNC. Returns the cycles run
+// before a reflex (all of them when none).
+int impedance_cycles(const std::array<double, 7>& K, const std::array<double, 7>& D, int cycles) {
+  RecordingArm arm("");
+  DriveBus bus{BusSettings{}, arm};
+  const rt::Emulator& emulator = arm.arm.server().emulator();
+  bus.receive(frame(kNmt, {0x01, 0x00}));
+  std::array<double, 7> q{}, dq{}, q0{}, tau{};
+  const auto cycle = [&](uint16_t cw) {
+    for (int n = 1; n <= 7; ++n) {
+      const auto raw = static_cast<int16_t>(std::lround(tau[n - 1] / torque_step(n - 1)));
+      bus.receive(frame(kRpdo1 + n, {uint8_t(cw), uint8_t(cw >> 8), uint8_t(raw), uint8_t(uint16_t(raw) >> 8)}));
+    }
+    bus.clear_sent();
+    bus.receive(frame(kSync, {}));
+    for (const Frame& f : bus.sent()) {
+      const int j = static_cast<int>(f.id & 0x7F) - 1;
+      if ((f.id & 0x780) == kTpdo1) q[j] = static_cast<int32_t>(get_le(&f.data[2], 4)) * 1e-6;
+      if ((f.id & 0x780) == kTpdo2) dq[j] = static_cast<int32_t>(get_le(&f.data[0], 4)) * 1e-6;
+    }
+  };
+  for (uint16_t cw : {0x06, 0x07, 0x0F, 0x0F}) cycle(cw);
+  q0 = q;
+  for (int k = 0; k < cycles; ++k) {
+    cycle(0x0F);
+    if (!emulator.in_motion()) return k;
+    const double offset = 0.1 * (1.0 - std::cos(2.0 * M_PI * k * 1e-3 / 4.0));
+    for (int j = 0; j < 7; ++j) tau[j] = K[j] * (q0[j] + (j == 0 || j == 3 ? offset : 0.0) - q[j]) - D[j] * dq[j];
+  }
+  return cycles;
+}
+
+TEST(CanServeExamples, TheExamplesGainsAreStableWithTheBusLatency) {
+  EXPECT_EQ(impedance_cycles({300, 300, 300, 300, 120, 60, 20}, {25, 25, 25, 10, 8, 5, 2}, 3000), 3000);
+  // libfranka's joint_impedance_control gains, stable at the FCI's one cycle, are not at two.
+  EXPECT_LT(impedance_cycles({600, 600, 600, 600, 250, 150, 50}, {50, 50, 50, 20, 20, 20, 10}, 3000), 100);
+}
+
+TEST(CanBusLoad, FrameLengthsAreCanbusloadsWorstCase) {
+  // can-utils canbusload (default: worst-case stuffing), measured on vcan in the notes: an 11-bit
+  // frame of 0 / 4 / 8 data bytes counts 55 / 95 / 135 bits.
+  EXPECT_EQ(frame_bits(0), 55u);
+  EXPECT_EQ(frame_bits(4), 95u);
+  EXPECT_EQ(frame_bits(8), 135u);
+  // One default CST cycle of the seven drives on one bus: SYNC, 7 RPDO1 (4 B), 7 TPDO1 (8 B),
+  // 7 TPDO2 (7 B) = 2540 bits: 254 % of 1 Mbit/s at 1 kHz (the notes' table, worst case).
+  EXPECT_EQ(frame_bits(0) + 7 * (frame_bits(4) + frame_bits(8) + frame_bits(7)), 2540u);
+}
+
+TEST(CanSplit, JointsSpreadOverNumberedInterfacesInBlocks) {
+  EXPECT_EQ(split_interfaces("vcan0", 1), std::vector<std::string>{"vcan0"});
+  EXPECT_EQ(split_interfaces("vcan2", 3), (std::vector<std::string>{"vcan2", "vcan3", "vcan4"}));
+  EXPECT_THROW(split_interfaces("can", 2), std::invalid_argument);
+  EXPECT_THROW(split_interfaces("vcan0", 8), std::invalid_argument);
+  std::vector<int> per_interface(4);
+  for (int j = 0; j < 7; ++j) ++per_interface[interface_of_joint(j, 4)];
+  EXPECT_EQ(per_interface, (std::vector<int>{2, 2, 2, 1}));   // 4 buses: at most 2 joints, 63-77 % each at 1 Mbit/s
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(interface_of_joint(j, 1), 0);
+}
+
+}  // namespace
+}  // namespace csp::can
