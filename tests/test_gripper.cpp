@@ -457,10 +457,17 @@ TEST(FrankaGripper, StopAbortsAMoveInAnotherThread) {
   EXPECT_GT(gripper.readOnce().width, 0.05);   // stopped after ~0.2 s of closing at 0.02 m/s
 }
 
-TEST(FrankaGripper, AnyOtherAddressIsAnEmptyHand) {
+// An IP address finds the hand of the robot franka::Robot finds there (libfranka_panda: the hand with
+// a 30 mm object between its fingers, and no pump).
+TEST(FrankaGripper, AnIpAddressIsTheLibfrankaScenariosHand) {
   franka::Gripper gripper("172.16.0.2");
   EXPECT_EQ(gripper.serverVersion(), 3);
   EXPECT_DOUBLE_EQ(gripper.readOnce().max_width, 0.08);
+  EXPECT_TRUE(gripper.grasp(0.03, 0.1, 20.0));
+}
+
+TEST(FrankaVacuumGripper, NoPumpMountedCannotBeConnected) {
+  EXPECT_THROW(franka::VacuumGripper("172.16.0.2"), franka::NetworkException);
 }
 
 TEST(FrankaVacuumGripper, VacuumObjectAsLibfrankasExample) {
@@ -481,7 +488,7 @@ TEST(FrankaVacuumGripper, VacuumObjectAsLibfrankasExample) {
 }
 
 TEST(FrankaVacuumGripper, NoPartFailsAtTheTimeout) {
-  franka::VacuumGripper gripper("172.16.0.2");
+  franka::VacuumGripper gripper(write_scenario("pump_without_part.yaml", "", "{reaction_time: 0.05}"));
   const auto start = Clock::now();
   EXPECT_FALSE(gripper.vacuum(100, std::chrono::milliseconds(300)));
   EXPECT_GE(seconds_since(start), 0.3);

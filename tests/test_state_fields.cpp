@@ -53,10 +53,18 @@ constexpr std::size_t doubles_in() {
   else return sizeof(Field) / sizeof(double);
 }
 
+// A field's offset measured on an object: RobotState is not standard-layout (franka::Errors holds
+// references), where offsetof is only conditionally supported.
+template <typename Field>
+std::size_t offset_of(Field RobotState::*field) {
+  static const RobotState state{};
+  return static_cast<std::size_t>(reinterpret_cast<const char*>(&(state.*field)) - reinterpret_cast<const char*>(&state));
+}
+
 const std::vector<Listed>& listed_fields() {
   static const std::vector<Listed> fields = {
-#define CSP_DOUBLES(name) {#name, offsetof(RobotState, name), sizeof(RobotState::name), doubles_in<decltype(RobotState::name)>()},
-#define CSP_OTHER(name) {#name, offsetof(RobotState, name), sizeof(RobotState::name), 0},
+#define CSP_DOUBLES(name) {#name, offset_of(&RobotState::name), sizeof(RobotState::name), doubles_in<decltype(RobotState::name)>()},
+#define CSP_OTHER(name) {#name, offset_of(&RobotState::name), sizeof(RobotState::name), 0},
       CSP_ROBOT_STATE_FIELDS(CSP_DOUBLES, CSP_OTHER)
 #undef CSP_DOUBLES
 #undef CSP_OTHER
