@@ -7,6 +7,7 @@ a master's usual cycle thread: every RPDO, then one SYNC.
 
   canopen_interop.py CSP VENDOR WORK
 """
+import math
 import os
 import signal
 import struct
@@ -116,15 +117,19 @@ def main(csp, vendor, work):
         for node in nodes:
             node.state = "OPERATION ENABLED"
         check(all(n.state == "OPERATION ENABLED" for n in nodes), "BaseNode402.state = OPERATION ENABLED on every node")
-        # Joint 1: +400 urad in 1 urad steps, one per cycle (inside libfranka's jerk limits).
+        # Joint 1: +4000 urad along a cosine in 400 cycles (jerk about 1 rad/s^3 plus the 1 urad
+        # quantization's, inside the Panda's 7500 rad/s^3). The
+        # plant's static friction stops the robot's joint impedance (600 N m/rad) anywhere within
+        # breakaway / stiffness = 0.245 / 600 = 408 urad of the target, as a real joint sticks.
         moved_from = cycles[0]
 
         def csp_cycle(k):
-            nodes[0].rpdo[1]["Target position"].raw = start[0] + min(max(k - moved_from, 0), 400)
+            step = min(max(k - moved_from, 0), 400)
+            nodes[0].rpdo[1]["Target position"].raw = start[0] + round(2000 * (1 - math.cos(math.pi * step / 400)))
         on_cycle[0] = csp_cycle
         wait_cycles(500)
         q1 = position(nodes[0])
-        check(abs(q1 - (start[0] + 400)) < 50, "CSP: joint 1 followed +400 urad (at %+d urad)" % (q1 - start[0]))
+        check(abs(q1 - (start[0] + 4000)) < 450, "CSP: joint 1 followed +4000 urad (at %+d urad)" % (q1 - start[0]))
         check(not emcy, "no EMCY during the CSP motion: %s" % emcy)
 
         # CST: disable operation (the motion finishes), switch the mode, enable, torque on joint 7.
@@ -140,12 +145,14 @@ def main(csp, vendor, work):
         q7 = position(nodes[6])
         started = cycles[0]
 
-        def cst_cycle(k):   # 0.1 N m on joint 7 (0x6076 = 500 mN m: 200 per mille), ramped over 50 cycles
-            nodes[6].rpdo[1]["Target torque"].raw = min(k - started, 50) * 4
+        # 0.3 N m on joint 7 (0x6076 = 500 mN m: 600 per mille), ramped over 50 cycles: above the
+        # joint's breakaway torque (0.21 N m, configs/robots/panda.yaml), so it turns.
+        def cst_cycle(k):
+            nodes[6].rpdo[1]["Target torque"].raw = min(k - started, 50) * 12
         on_cycle[0] = cst_cycle
         wait_cycles(250)
         moved = position(nodes[6]) - q7
-        check(moved > 1000, "CST: 0.1 N m turned joint 7 (%+d urad)" % moved)
+        check(moved > 1000, "CST: 0.3 N m turned joint 7 (%+d urad)" % moved)
         check(not emcy, "no EMCY during the CST motion: %s" % emcy)
     finally:
         stop.set()
