@@ -12,7 +12,6 @@
 namespace csp::rt {
 namespace {
 
-constexpr double kLimitTolerance = 1e-9;       // round-off allowance on every limit check
 constexpr double kOrthonormalThreshold = 1e-5; // libfranka control_tools.h isHomogeneousTransformation
 constexpr double kNewtonDamping = 1e-6;        // lambda of the damped Newton step [m or rad]
 constexpr int kMaxNewtonIterations = 20;

@@ -11,7 +11,6 @@
 namespace csp::rt {
 namespace {
 
-constexpr double kLimitTolerance = 1e-9;   // round-off allowance on every limit check
 constexpr double kBrakingTimeConstant = 0.02;   // [s] reflex deceleration, then the brakes close
 constexpr double kBrakesClosedVelocity = 5e-3;  // [rad/s] every joint slower: brakes engage
 constexpr double kMaxBrakingTime = 0.5;         // [s] the brakes close at the latest after this

@@ -25,6 +25,7 @@
 namespace csp::rt {
 
 inline constexpr double kDeltaT = 1e-3;   // FCI cycle [s] (libfranka kDeltaT)
+inline constexpr double kLimitTolerance = 1e-9;   // round-off allowance on every limit check
 
 // What a motion commands (libfranka's Robot::control overloads): joint-level torques, or one of
 // the four external motion generators.
