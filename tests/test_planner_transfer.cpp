@@ -213,6 +213,11 @@ TEST(Transfer, EveryShippedTransferIsFreeAndWithinLimitsAt1kHz) {
           EXPECT_LE(r.torque, fractions.torque * 1.001);
           EXPECT_LE(r.tool_speed, 1.001);
           EXPECT_LT(r.largest_step, 0.01);
+          std::string bindings;
+          for (const auto& segment : timed.segments) bindings += (bindings.empty() ? "" : ",") + segment.binding;
+          std::printf("%s %s %s -> %s: %zu waypoints, %.3f s (%s), lowest clearance %.4f m (%s)\n", robot.c_str(),
+                      name.c_str(), from.name.c_str(), to.name.c_str(), plan.waypoints.size(), timed.profile.duration(),
+                      bindings.c_str(), r.lowest_clearance, r.lowest_pair.c_str());
           ++transfers;
         }
     }
