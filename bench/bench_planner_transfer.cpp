@@ -12,8 +12,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "csp/io/robot_config.hpp"
 #include "csp/planners/checker.hpp"
+#include "planner_support.hpp"
 #include "csp/planners/ompl_bridge.hpp"
 
 namespace {
@@ -21,7 +21,7 @@ namespace {
 using namespace csp;
 namespace bridge = planners::ompl_bridge;
 
-const std::vector<std::string> kScenes = {"ultrasound_abdomen", "doppler_femoral", "mis_rcm", "craniotomy"};
+using bench::kShippedScenes;
 constexpr double kNaiveStep = 0.002;   // [rad]
 constexpr double kMargin = 0.05;       // TransferOptions' default [rad]
 
@@ -34,11 +34,7 @@ bridge::Joints joints(const Vector7& q) {
 
 struct Fixture {
   explicit Fixture(int scene_index)
-      : scene(planners::load_scene(std::string(CSP_SOURCE_DIR) + "/configs/scenes/" + kScenes[scene_index] + ".yaml")),
-        model(planners::with_tool(
-            model_parameters(load_robot_config(std::string(CSP_SOURCE_DIR) + "/configs/robots/panda.yaml"), {}),
-            scene.tool)),
-        checker(model, scene) {
+      : scene(bench::shipped_scene(scene_index)), model(bench::panda_with_tool(scene)), checker(model, scene) {
     const JointLimits& limits = model.parameters().joint_limits;
     const Vector7 start = scene.pose(scene.start).q;
     request.start = joints(start);
@@ -85,7 +81,7 @@ void BM_Transfer(benchmark::State& state) {
   const bridge::Callbacks callbacks = f.callbacks(kCertified);
   bridge::Result result;
   for (auto _ : state) result = bridge::plan_transfer(f.request, callbacks);
-  state.SetLabel(kScenes[state.range(0)] + (result.solved ? "" : " (not solved: " + result.message + ")"));
+  state.SetLabel(kShippedScenes[state.range(0)] + (result.solved ? "" : " (not solved: " + result.message + ")"));
   state.counters["waypoints"] = static_cast<double>(result.waypoints.size());
   state.counters["iterations"] = static_cast<double>(result.iterations);
   if (kCertified) {   // the ratio to the naive baseline, both timed here on the same problem under the same load
