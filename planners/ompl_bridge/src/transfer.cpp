@@ -34,6 +34,9 @@ Result plan_transfer(const Request& request, const Callbacks& callbacks) {
   const ob::PlannerStatus status = setup.solve(budget.condition());
   result.iterations = budget.used();
   result.cap_hit = budget.exhausted();
+  // The solution path is the problem definition's own copy. OMPL 1.5.2's LazyPRM frees its roadmap
+  // only in clear() (its destructor leaks it; fixed upstream by ompl/ompl#909).
+  setup.getPlanner()->clear();
 
   if (status != ob::PlannerStatus::EXACT_SOLUTION) {
     if (status == ob::PlannerStatus::APPROXIMATE_SOLUTION) {
