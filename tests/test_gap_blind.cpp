@@ -67,12 +67,16 @@ std::string verdict(const Diagnosis& d) {
 //   rotor's inertia: an armature in its plant changes the motion, not the torque the sensor reads
 //   along that motion (rt/src/emulator.cpp): nothing to name;
 // - its plant carries Dahl's friction whole (tests/gap_emulated.hpp): the sliding friction it
-//   relaxes to, the larger part, and the presliding memory beyond it.
+//   relaxes to, the larger part, and the presliding memory beyond it. Its sliding level is reached
+//   within the presliding distance of each reversal: a step in velocity far sharper than Gaz's
+//   sigmoid, which joint_friction evaluates on the smoothed motion; the library's law for the sharp
+//   part at zero velocity, evaluated on the 1 kHz grid and smoothed like the torque, is
+//   static_friction's (measured: named on every seed).
 using Shows = std::string (*)(const std::string& effect);
 std::string as_injected(const std::string& effect) { return effect; }
 std::string on_the_emulated_robot(const std::string& effect) {
   if (effect == "armature") return "none";
-  if (effect == "friction_hysteresis") return "joint_friction+friction_hysteresis";
+  if (effect == "friction_hysteresis") return "joint_friction+friction_hysteresis+static_friction";
   return effect;
 }
 
