@@ -352,5 +352,46 @@ TEST(Seams, EmulatedDefaultScenarioNamesWhatReallyDiffers) {
   std::filesystem::remove(csv);
 }
 
+// (e) The same scenario for 12 s: its scripted push on the hand (6-7 s) falls at the start of the
+// held-out half. A transient that large dominates the half it is in; the diagnosis must still name
+// the plant's friction first, name nothing the emulated robot does not have, and localise the push
+// in verdict.unexplained: kind transient, on the joint the robot's own external-torque estimate
+// (tau_ext_hat_filtered, from its model, not gap's) finds it largest on, starting when it starts.
+TEST(Seams, EmulatedPushIsLocalisedAndLeftOutOfTheSelection) {
+  const std::string csv = test::temp_path("push.csv"), out = test::temp_path("push.out");
+  ASSERT_EQ(run_csp({"emulate", kScenario, "--duration", "12", "--log", csv}, out), 0) << read_text(out);
+  const JointLog log = read_joint_log_csv(csv);
+  Vector7 push = Vector7::Zero(), steady = Vector7::Zero();  // mean |tau_ext| during the push and before it
+  int in_push = 0, before = 0;
+  for (std::size_t k = 0; k < log.size(); ++k) {
+    const Vector7 estimate = log.tau_ext_hat_filtered[k].cwiseAbs();
+    if (log.t[k] > 6.1 && log.t[k] < 6.9) push += estimate, ++in_push;
+    if (log.t[k] > 3.0 && log.t[k] < 5.9) steady += estimate, ++before;
+  }
+  int pushed_joint = 0;
+  (push / in_push - steady / before).maxCoeff(&pushed_joint);
+
+  const nlohmann::json j = gap_json(csv, {"--inertia", "libfranka_fit", "--friction", "none", "--ee", "hand"}, "push");
+  const nlohmann::json& verdict = j.at("verdict");
+  const std::vector<std::string> causes = verdict.at("causes");
+  ASSERT_FALSE(causes.empty()) << verdict.dump();
+  EXPECT_EQ(causes[0], "joint_friction");
+  for (const std::string& cause : causes)  // payload and sensor_gain stand in for part of the inertial difference
+    EXPECT_TRUE(cause == "joint_friction" || cause == "inertial_parameters" || cause == "time_delay" ||
+                cause == "static_friction" || cause == "payload" || cause == "sensor_gain")
+        << "named " << cause << ", which the emulated robot does not have";
+  bool found = false;
+  for (const nlohmann::json& u : verdict.at("unexplained"))
+    if (u.at("kind") == "transient") {
+      found = true;
+      EXPECT_EQ(u.at("joint").get<int>(), pushed_joint + 1) << u.dump();
+      EXPECT_GE(u.at("value").get<double>(), 5.5) << u.dump();  // the stretch of 0.5 s before, at most
+      EXPECT_LE(u.at("value").get<double>(), 6.1) << u.dump();
+      std::printf("%s\n", u.at("detail").get<std::string>().c_str());
+    }
+  EXPECT_TRUE(found) << verdict.at("unexplained").dump();
+  std::filesystem::remove(csv);
+}
+
 }  // namespace
 }  // namespace csp

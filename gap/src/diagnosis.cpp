@@ -7,9 +7,12 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <optional>
 #include <random>
 #include <tuple>
 #include <unsupported/Eigen/FFT>
+
+#include "csp/io/svg_plot.hpp"
 
 namespace csp::gap {
 
@@ -298,44 +301,80 @@ std::array<JointGap, kNumJoints> where_it_lies(const Part& train, const Part& he
   return gaps;
 }
 
-}  // namespace
+// Short disturbances confined to a part (a push on the arm, a bump): stretches of kTransientWindow
+// whose mean square left after the causes is above kTransientRatio times the median stretch's of
+// both parts, widened by one stretch each side (the filter and the ramps smear them). Structure
+// that lasts (an unmodelled effect, a drift) is not a transient: a part with more than
+// kTransientShare of its stretches above the ratio keeps them all. Marks the samples outside transients in `steady`.
+std::vector<Transient> find_transients(const std::array<const Part*, 2>& parts,
+                                       const std::array<const VectorXd*, 2>& left,
+                                       std::array<std::vector<bool>, 2>& steady) {
+  std::array<std::vector<double>, 2> window_ms;
+  std::vector<double> pooled;
+  std::array<std::size_t, 2> width{};
+  for (std::size_t p = 0; p < 2; ++p) {
+    const Samples& s = parts[p]->samples;
+    const double period = (s.t.back() - s.t.front()) / static_cast<double>(s.size() - 1);
+    width[p] = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(kTransientWindow / period)));
+    for (std::size_t start = 0; start + width[p] <= s.size(); start += width[p]) {
+      const auto rows = static_cast<Eigen::Index>(kNumJoints * width[p]);
+      window_ms[p].push_back(left[p]->segment(kNumJoints * static_cast<Eigen::Index>(start), rows).squaredNorm() /
+                             static_cast<double>(rows));
+      pooled.push_back(window_ms[p].back());
+    }
+  }
+  std::vector<Transient> found;
+  for (std::size_t p = 0; p < 2; ++p) steady[p].assign(parts[p]->samples.size(), true);
+  if (pooled.size() < 4) return found;
+  std::nth_element(pooled.begin(), pooled.begin() + static_cast<std::ptrdiff_t>(pooled.size() / 2), pooled.end());
+  const double median = pooled[pooled.size() / 2];
+  for (std::size_t p = 0; p < 2; ++p) {
+    const std::size_t windows = window_ms[p].size(), n = parts[p]->samples.size();
+    std::vector<bool> flagged(windows, false);
+    double count = 0.0;
+    for (std::size_t w = 0; w < windows; ++w)
+      if (window_ms[p][w] > kTransientRatio * median) {
+        ++count;
+        for (std::size_t v = w == 0 ? 0 : w - 1; v <= std::min(w + 1, windows - 1); ++v) flagged[v] = true;
+      }
+    if (count == 0.0 || count > kTransientShare * static_cast<double>(windows)) continue;
+    for (std::size_t w = 0; w < windows;) {
+      if (!flagged[w]) {
+        ++w;
+        continue;
+      }
+      std::size_t end = w;
+      while (end < windows && flagged[end]) ++end;
+      const std::size_t first = w * width[p], last = std::min(end * width[p], n) - 1;  // samples
+      Vector7 ms = Vector7::Zero(), total = joint_mean_square(*left[p]);
+      for (std::size_t k = first; k <= last; ++k) {
+        ms += left[p]->segment<kNumJoints>(kNumJoints * static_cast<Eigen::Index>(k)).cwiseAbs2();
+        steady[p][k] = false;
+      }
+      ms /= static_cast<double>(last - first + 1);
+      int joint = 0;
+      ms.maxCoeff(&joint);
+      const double share = ms[joint] * static_cast<double>(last - first + 1) / (total[joint] * static_cast<double>(n));
+      found.push_back({p == 1, parts[p]->samples.t[first], parts[p]->samples.t[last], joint + 1, std::sqrt(ms[joint]),
+                       share});
+      w = end;
+    }
+  }
+  return found;
+}
 
-Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog& heldout_log,
-                   const DiagnosisOptions& options) {
-  const std::vector<std::unique_ptr<Effect>> library = effect_library(model);
-  const InertialRegressor regressor(model);
-  Diagnosis d;
-  d.train = evaluate_part(model, regressor, filter_log(train_log, options.filter));
-  d.heldout = evaluate_part(model, regressor, filter_log(heldout_log, options.filter));
-  const Part& train = d.train;
-  const Part& heldout = d.heldout;
-  d.baseline_train_rms = rms(train.residual);
-  d.baseline_heldout_rms = rms(heldout.residual);
-  d.where = where_it_lies(train, heldout);
-
-  // Null thresholds by effect size, for the residuals a step starts from.
-  const RandomRegressors random(train, heldout, options.seed);
+// Forward selection on (train, heldout): add the significant effect that removes most of what is
+// left, preferring fewer parameters within the parsimony margin; stop when no candidate is
+// significant. The causes and steps go to `d`; returns the selected set fitted.
+std::pair<EffectSet, SetFit> forward_selection(const std::vector<std::unique_ptr<Effect>>& library, const Part& train,
+                                               const Part& heldout, const RandomRegressors& random,
+                                               const DiagnosisOptions& options, Diagnosis& d) {
   std::map<int, double> thresholds;
   auto threshold = [&](int size, const VectorXd& train_left, const VectorXd& heldout_left) {
     if (!thresholds.count(size))
       thresholds[size] = random.best_improvement(size, options.null_draws, train_left, heldout_left);
     return thresholds[size];
   };
-
-  // Each effect alone, against the baseline.
-  for (const auto& effect : library) {
-    const EffectSet set = {effect.get()};
-    const SetFit fit = fit_set(set, train, heldout, effect->initial_guess(train, train.residual));
-    d.effects.push_back(make_result(effect->name(), set, fit, heldout.residual,
-                                    threshold(effect->size(), train.residual, heldout.residual), options));
-    d.effects.back().params = describe_set(set, fit);
-  }
-  std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
-    return a.explained_fraction > b.explained_fraction;
-  });
-
-  // Forward selection: add the significant effect that removes most of what is left, preferring
-  // fewer parameters within the parsimony margin; stop when no candidate is significant.
   EffectSet selected;
   SetFit current{VectorXd(0), VectorXd(0), train.residual, heldout.residual};
   while (selected.size() < library.size()) {
@@ -372,12 +411,17 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
     current = best_fit;
   }
 
-  // Backward check: a small effect picked early (it stood in for part of a larger one, and the
-  // parsimony rule preferred it) may add nothing once the later causes are in; and a fit that passed
-  // by chance on one held-out part rarely passes with the parts' roles swapped. So every cause must
-  // pass the significance criterion against the other causes, fitted on the training part and judged
-  // on the held-out one, and also fitted on the held-out part and judged on the training one. The
-  // weakest cause that fails is dropped and the rest refitted, until all pass.
+  return {selected, current};
+}
+
+// Backward check: a small effect picked early (it stood in for part of a larger one, and the
+// parsimony rule preferred it) may add nothing once the later causes are in; and a fit that passed
+// by chance on one held-out part rarely passes with the parts' roles swapped. So every cause must
+// pass the significance criterion against the other causes, fitted on the training part and judged
+// on the held-out one, and also fitted on the held-out part and judged on the training one. The
+// weakest cause that fails is dropped and the rest refitted, until all pass.
+void backward_check(EffectSet& selected, SetFit& current, const Part& train, const Part& heldout,
+                    const RandomRegressors& random, const DiagnosisOptions& options, Diagnosis& d) {
   const RandomRegressors random_swapped(heldout, train, options.seed);
   // Whether `effect` of the jointly fitted `with` passes against the set without it.
   auto passes = [&](const EffectSet& set, const Effect* effect, const SetFit& with, const Part& fit_on,
@@ -412,11 +456,89 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
       dropped = true;
     }
   }
+}
+
+}  // namespace
+
+Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog& heldout_log,
+                   const DiagnosisOptions& options) {
+  const std::vector<std::unique_ptr<Effect>> library = effect_library(model);
+  const InertialRegressor regressor(model);
+  Diagnosis d;
+  d.train = evaluate_part(model, regressor, filter_log(train_log, options.filter));
+  d.heldout = evaluate_part(model, regressor, filter_log(heldout_log, options.filter));
+  const Part& train = d.train;
+  const Part& heldout = d.heldout;
+  d.baseline_train_rms = rms(train.residual);
+  d.baseline_heldout_rms = rms(heldout.residual);
+  d.where = where_it_lies(train, heldout);
+
+  // Null thresholds by effect size, for the residuals a step starts from.
+  const RandomRegressors random(train, heldout, options.seed);
+  std::map<int, double> thresholds;
+  auto threshold = [&](int size, const VectorXd& train_left, const VectorXd& heldout_left) {
+    if (!thresholds.count(size))
+      thresholds[size] = random.best_improvement(size, options.null_draws, train_left, heldout_left);
+    return thresholds[size];
+  };
+
+  // Each effect alone, against the baseline.
+  for (const auto& effect : library) {
+    const EffectSet set = {effect.get()};
+    const SetFit fit = fit_set(set, train, heldout, effect->initial_guess(train, train.residual));
+    d.effects.push_back(make_result(effect->name(), set, fit, heldout.residual,
+                                    threshold(effect->size(), train.residual, heldout.residual), options));
+    d.effects.back().params = describe_set(set, fit);
+  }
+  std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
+    return a.explained_fraction > b.explained_fraction;
+  });
+
+  auto [selected, current] = forward_selection(library, train, heldout, random, options, d);
+
+  // A short transient disturbance in one part (a push on the arm, a bump) dominates the part it is
+  // in, and the selection's judgement on it: when the residual left has one, the selection runs
+  // again on the steady samples without it (the transients go to verdict.unexplained).
+  std::array<std::vector<bool>, 2> steady;
+  d.transients = find_transients({&train, &heldout}, {&current.train_left, &current.heldout_left}, steady);
+  Part steady_train, steady_heldout;
+  std::optional<RandomRegressors> random_steady;
+  if (!d.transients.empty()) {
+    steady_train = subset(train, steady[0]), steady_heldout = subset(heldout, steady[1]);
+    random_steady.emplace(steady_train, steady_heldout, options.seed);
+    d.causes.clear(), d.steps.clear();
+    std::tie(selected, current) = forward_selection(library, steady_train, steady_heldout, *random_steady, options, d);
+  }
+  const Part& selection_train = d.transients.empty() ? train : steady_train;
+  const Part& selection_heldout = d.transients.empty() ? heldout : steady_heldout;
+  backward_check(selected, current, selection_train, selection_heldout, random_steady ? *random_steady : random,
+                 options, d);
+  // The verdict on the whole parts, transients included.
+  const VectorXd theta = current.theta;
+  current = {theta, current.sigma, train.residual - set_torque(selected, train, theta),
+             heldout.residual - set_torque(selected, heldout, theta)};
   d.verdict_heldout_rms_after = rms(current.heldout_left);
   d.unexplained_fraction = current.heldout_left.squaredNorm() / heldout.residual.squaredNorm();
   d.verdict_params = selected.empty() ? nlohmann::json::object() : describe_set(selected, current);
   d.verdict_heldout_torque = heldout.residual - current.heldout_left;
-  d.unexplained = localise_unexplained(heldout, current.heldout_left, d.causes);
+  // What is left, localised on the held-out part's steady samples, and the transients of both parts.
+  if (d.transients.empty()) {
+    d.unexplained = localise_unexplained(heldout, current.heldout_left, d.causes);
+  } else {
+    std::vector<Eigen::Index> rows;
+    for (std::size_t k = 0; k < steady[1].size(); ++k)
+      if (steady[1][k])
+        for (int j = 0; j < kNumJoints; ++j) rows.push_back(kNumJoints * static_cast<Eigen::Index>(k) + j);
+    d.unexplained = localise_unexplained(selection_heldout, current.heldout_left(rows), d.causes);
+  }
+  for (const Transient& t : d.transients)
+    d.unexplained.push_back(
+        {t.joint, "transient", t.size, t.share, t.start,
+         format("joint %d: a transient of %.3f N m at %.2f-%.2f s in the %s part (%.0f %% of what is left on it "
+                "there); no library effect (a push, a contact?); the selection left it out",
+                t.joint, t.size, t.start, t.end, t.heldout ? "held-out" : "training", 100.0 * t.share)});
+  std::stable_sort(d.unexplained.begin(), d.unexplained.end(),
+                   [](const auto& a, const auto& b) { return a.size > b.size; });
   return d;
 }
 

@@ -146,12 +146,39 @@ LogOptions noise_free(LogOptions options) {
   return options;
 }
 
-JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned trajectory_seed, unsigned noise_seed,
-                      const LogOptions& options) {
+ModelParameters truth_parameters(const Model& model, const InjectedEffects& truth) {
   ModelParameters p = model.parameters();
   if (truth.links) p.links = *truth.links;
   p.load = combine(p.load, truth.payload);
   p.gravity = rotation_x(truth.tilt_x) * rotation_y(truth.tilt_y) * p.gravity;
+  return p;
+}
+
+bool InjectedJointTorque::present(const InjectedEffects& truth) {
+  return !truth.ripple_amplitude.isZero() || !truth.hysteresis_amplitude.isZero() || !truth.load_friction.isZero() ||
+         truth.vibration_joint != 0;
+}
+
+Vector7 InjectedJointTorque::operator()(double t, const Vector7& q, const Vector7& dq, const Vector7& tau_transmitted) {
+  Vector7 tau;
+  for (int j = 0; j < kNumJoints; ++j) {
+    z_[j] = started_ ? dahl_state(z_[j], q[j] - q_previous_[j], truth_.presliding_distance) : smooth_sign(dq[j]);
+    tau[j] = position_ripple(truth_.ripple_amplitude[j] * std::cos(truth_.ripple_phase[j]),
+                             truth_.ripple_amplitude[j] * std::sin(truth_.ripple_phase[j]), truth_.ripple_period[j], q[j]) +
+             (dahl_ == Dahl::kWhole ? truth_.hysteresis_amplitude[j] * z_[j]
+                                    : hysteresis_torque(truth_.hysteresis_amplitude[j], z_[j], dq[j])) +
+             load_friction(truth_.load_friction[j], tau_transmitted[j], dq[j]);
+  }
+  started_ = true;
+  q_previous_ = q;
+  if (truth_.vibration_joint)
+    tau[truth_.vibration_joint - 1] += truth_.vibration_amplitude * std::sin(2.0 * M_PI * truth_.vibration_frequency * t);
+  return tau;
+}
+
+JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned trajectory_seed, unsigned noise_seed,
+                      const LogOptions& options) {
+  const ModelParameters p = truth_parameters(model, truth);
   const Model true_model(p);
   const FourierExcitation trajectory(p.joint_limits, trajectory_seed);
 
@@ -166,7 +193,7 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
   log.source = "generated (trajectory seed " + std::to_string(trajectory_seed) + ")";
   Data data;
   const double dt = 1.0 / options.rate;
-  Vector7 z = Vector7::Zero(), q_previous;  // Dahl's friction state along the sensed motion
+  InjectedJointTorque injected(truth);
   for (double t = 0.0; t <= options.duration; t += dt * (1.0 + uniform(engine, -0.1, 0.1))) {
     Vector7 q, dq, ddq, rigid;
     trajectory.state(t, q, dq, ddq);
@@ -176,19 +203,9 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
     trajectory.state(t - truth.delay, q, dq, ddq);  // the torque the sensor reports now
     rnea(true_model, data, q, dq, ddq, rigid);
     Vector7 tau = rigid + friction_torque(p.friction, dq) + friction_torque(truth.friction, dq) +
-                  truth.armature.cwiseProduct(ddq);
-    for (int j = 0; j < kNumJoints; ++j) {
-      z[j] = log.t.size() == 1 ? smooth_sign(dq[j]) : dahl_state(z[j], q[j] - q_previous[j], truth.presliding_distance);
-      tau[j] += position_ripple(truth.ripple_amplitude[j] * std::cos(truth.ripple_phase[j]),
-                                truth.ripple_amplitude[j] * std::sin(truth.ripple_phase[j]), truth.ripple_period[j], q[j]) +
-                stribeck_excess(truth.breakaway_excess[j], truth.stribeck_velocity, dq[j]) +
-                hysteresis_torque(truth.hysteresis_amplitude[j], z[j], dq[j]) +
-                load_friction(truth.load_friction[j], rigid[j], dq[j]);
-    }
-    q_previous = q;
-    if (truth.vibration_joint)
-      tau[truth.vibration_joint - 1] +=
-          truth.vibration_amplitude * std::sin(2.0 * M_PI * truth.vibration_frequency * t);
+                  truth.armature.cwiseProduct(ddq) + injected(t - truth.delay, q, dq, rigid);
+    for (int j = 0; j < kNumJoints; ++j)
+      tau[j] += stribeck_excess(truth.breakaway_excess[j], truth.stribeck_velocity, dq[j]);
     // What the sensor reports: scaled, offset, drifting since the log began.
     tau = tau + truth.sensor_gain.cwiseProduct(tau) + truth.sensor_offset + truth.drift_rate * t;
     log.tau_J.push_back(tau + noise(options.torque_noise));

@@ -33,6 +33,25 @@ Part evaluate_part(const Model& model, const InertialRegressor& regressor, Sampl
   return part;
 }
 
+Part subset(const Part& part, const std::vector<bool>& keep) {
+  Part out;
+  const Samples& from = part.samples;
+  Samples& to = out.samples;
+  to.source = from.source, to.grid_q = from.grid_q, to.grid_dq = from.grid_dq, to.filter = from.filter;
+  std::vector<Eigen::Index> rows;
+  for (std::size_t k = 0; k < from.size(); ++k) {
+    if (!keep[k]) continue;
+    to.t.push_back(from.t[k]), to.q.push_back(from.q[k]), to.dq.push_back(from.dq[k]), to.ddq.push_back(from.ddq[k]);
+    to.tau.push_back(from.tau[k]), to.dtau.push_back(from.dtau[k]), to.grid_index.push_back(from.grid_index[k]);
+    out.predicted.push_back(part.predicted[k]), out.gravity.push_back(part.gravity[k]);
+    for (int j = 0; j < kNumJoints; ++j) rows.push_back(kNumJoints * static_cast<Eigen::Index>(k) + j);
+  }
+  out.residual = part.residual(rows);
+  out.inertial = part.inertial(rows, Eigen::all);
+  out.tilt = part.tilt(rows, Eigen::all);
+  return out;
+}
+
 Eigen::VectorXd stack(const std::vector<Vector7>& series) {
   Eigen::VectorXd out(kNumJoints * static_cast<Eigen::Index>(series.size()));
   for (std::size_t k = 0; k < series.size(); ++k)

@@ -68,6 +68,27 @@ double high_frequency_share(const VectorXd& r, double sample_period) {
   return total > 0.0 ? high / total : 0.0;
 }
 
+// A residual periodic in time at a frequency the motion itself has is no vibration: it follows the
+// motion (a motion-dependent torque the model lacks). Whether a joint's velocity has at least
+// kMotionShare of its variance in a sinusoid at `frequency` (over a short part the frequency
+// resolution is coarse, so which joint is not told).
+constexpr double kMotionShare = 0.1;
+bool motion_at(const Samples& s, const VectorXd& t, double frequency) {
+  const auto n = t.size();
+  MatrixXd A(n, 2);
+  A.col(0) = (2.0 * M_PI * frequency * t).array().sin();
+  A.col(1) = (2.0 * M_PI * frequency * t).array().cos();
+  const auto qr = A.colPivHouseholderQr();
+  for (int i = 0; i < kNumJoints; ++i) {
+    VectorXd dq(n);
+    for (Eigen::Index k = 0; k < n; ++k) dq[k] = s.dq[static_cast<std::size_t>(k)][i];
+    dq.array() -= dq.mean();
+    const double share = 1.0 - (dq - A * qr.solve(dq)).squaredNorm() / std::max(dq.squaredNorm(), 1e-300);
+    if (share >= kMotionShare) return true;
+  }
+  return false;
+}
+
 // The library effect a kind of structure belongs to, or "" when none models it.
 std::string library_effect_of(const std::string& kind) {
   if (kind == "offset") return "sensor_offset";
@@ -86,6 +107,9 @@ std::string describe(const UnexplainedStructure& u, const std::vector<std::strin
   if (u.kind == "offset") what = format("a constant %.3f N m", u.value);
   if (u.kind == "time_drift") what = format("a drift of %.3f N m per minute", u.value);
   if (u.kind == "time_periodic") what = format("periodic in time at %.2f Hz", u.value);
+  if (u.kind == "motion_periodic")
+    what = format("periodic in time at %.2f Hz, a frequency the motion has: a torque that follows the motion, not "
+                  "a vibration", u.value);
   if (u.kind == "position_periodic") what = format("periodic in q%d with period %.3f rad", j, u.value);
   if (u.kind == "velocity_sign") what = format("a step with the sign of dq%d (%.3f N m)", j, u.value);
   if (u.kind == "velocity") what = format("proportional to dq%d (%.3f N m s/rad)", j, u.value);
@@ -142,9 +166,10 @@ std::vector<UnexplainedStructure> localise_unexplained(const Part& part, const V
     fit_column("acceleration", ddq, 1.0);
     fit_column("torque_level", tau, 1.0);
     consider(candidates, "high_frequency", high_frequency_share(r, sample_period), mean_square, 0.0);
-    const Candidate& best = *std::max_element(candidates.begin(), candidates.end(),
-                                              [](const Candidate& a, const Candidate& b) { return a.share < b.share; });
+    Candidate best = *std::max_element(candidates.begin(), candidates.end(),
+                                       [](const Candidate& a, const Candidate& b) { return a.share < b.share; });
     if (best.share < kUnexplainedShare || best.size < kUnexplainedSize) continue;
+    if (best.kind == "time_periodic" && motion_at(s, t, best.value)) best.kind = "motion_periodic";
     UnexplainedStructure u{j + 1, best.kind, best.size, best.share, best.value, ""};
     u.detail = describe(u, causes);
     found.push_back(u);

@@ -31,17 +31,8 @@ struct ControllerContext {
 
 Command torque(const Vector7& tau) { return Command{tau, false}; }
 
-// tau = K (q_d - q) + D (dq_d - dq) [+ M(q) ddq_d + c(q, dq)]
 Command joint_impedance(ControllerContext& c, const RobotState& state) {
-  const Vector7 q = vector_of(state.q), dq = vector_of(state.dq);
-  Vector7 tau = c.spec.stiffness.cwiseProduct(c.q_d - q) + c.spec.damping.cwiseProduct(c.dq_d - dq);
-  if (c.spec.feedforward) {
-    Vector7 inverse_dynamics, gravity;
-    rnea(c.model, c.data, q, dq, c.ddq_d, inverse_dynamics);
-    gravity_torque(c.model, c.data, q, gravity);
-    tau += inverse_dynamics - gravity;   // the robot adds gravity itself
-  }
-  return torque(tau);
+  return torque(joint_impedance_torque(c.model, c.data, c.spec, c.q_d, c.dq_d, c.ddq_d, state));
 }
 
 // libfranka's cartesian_impedance_control example: a spring-damper on K's pose (quaternion
@@ -84,6 +75,20 @@ class CartesianImpedance {
 };
 
 }  // namespace
+
+// tau = K (q_d - q) + D (dq_d - dq) [+ M(q) ddq_d + c(q, dq)]
+Vector7 joint_impedance_torque(const Model& model, Data& data, const ControllerSpec& spec, const Vector7& q_d,
+                               const Vector7& dq_d, const Vector7& ddq_d, const RobotState& state) {
+  const Vector7 q = vector_of(state.q), dq = vector_of(state.dq);
+  Vector7 tau = spec.stiffness.cwiseProduct(q_d - q) + spec.damping.cwiseProduct(dq_d - dq);
+  if (spec.feedforward) {
+    Vector7 inverse_dynamics, gravity;
+    rnea(model, data, q, dq, ddq_d, inverse_dynamics);
+    gravity_torque(model, data, q, gravity);
+    tau += inverse_dynamics - gravity;   // the robot adds gravity itself
+  }
+  return tau;
+}
 
 BuiltinController make_controller(const ControllerSpec& spec, const ControllerFaults& faults, const Emulator& emulator) {
   auto context = std::make_shared<ControllerContext>(emulator, spec);

@@ -478,7 +478,8 @@ LinkWrenches Emulator::external_link_wrenches(double t) {
 void Emulator::integrate() {
   PlantState& arm = plant_state_;
   TorqueLoop& loop = torque_loop_;
-  const LinkWrenches f_ext = external_link_wrenches(state_.time.toSec() - kDeltaT);
+  const double cycle_start = state_.time.toSec() - kDeltaT;
+  const LinkWrenches f_ext = external_link_wrenches(cycle_start);
   if (phase_ == Phase::kBraked) {
     // Brakes closed: the links stand still and the sensors carry the static load.
     arm.dq.setZero();
@@ -517,9 +518,11 @@ void Emulator::integrate() {
     if (braking) setpoint = -mass_diagonal.cwiseProduct(arm.dq) / kBrakingTimeConstant;
     loop.tau_motor += alpha * (setpoint + loop.gravity - loop.tau_motor);
 
-    // (M + armature) ddq = tau_motor - tau_friction(dq) - c - g + J^T f_ext
+    // (M + armature) ddq = tau_motor - tau_friction(dq) - tau_extra - c - g + J^T f_ext
     const FrictionModel& friction = plant_.parameters().friction;
-    const Vector7 tau_link = loop.tau_motor - friction_torque(friction, arm.dq);
+    Vector7 tau_link = loop.tau_motor - friction_torque(friction, arm.dq);
+    if (settings_.extra_joint_torque)
+      tau_link -= settings_.extra_joint_torque(cycle_start + s * h, arm.q, arm.dq, loop.tau_motor);
     forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, f_ext);
     if (static_friction) {
       // Static friction acts on the new velocity (implicit): a joint at rest stays exactly at rest

@@ -144,15 +144,20 @@ ExternalWrench read_wrench(const Field& f) {
 
 }  // namespace
 
-void RampedSineReference::evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
-  // Quintic ramp r(x) = 10x^3 - 15x^4 + 6x^5, x = t / ramp: r, r', r'' vanish at both ends but r(1) = 1.
-  double r = 1.0, dr = 0.0, ddr = 0.0;
-  if (ramp > 0.0 && t < ramp) {
-    const double x = t / ramp;
+void quintic_ramp(double t, double duration, double& r, double& dr, double& ddr) {
+  // r(x) = 10x^3 - 15x^4 + 6x^5, x = t / duration: r, r', r'' vanish at both ends but r(1) = 1.
+  r = 1.0, dr = 0.0, ddr = 0.0;
+  if (duration > 0.0 && t < duration) {
+    const double x = t / duration;
     r = x * x * x * (10.0 - 15.0 * x + 6.0 * x * x);
-    dr = 30.0 * x * x * (1.0 - 2.0 * x + x * x) / ramp;
-    ddr = 60.0 * x * (1.0 - 3.0 * x + 2.0 * x * x) / (ramp * ramp);
+    dr = 30.0 * x * x * (1.0 - 2.0 * x + x * x) / duration;
+    ddr = 60.0 * x * (1.0 - 3.0 * x + 2.0 * x * x) / (duration * duration);
   }
+}
+
+void RampedSineReference::evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
+  double r, dr, ddr;
+  quintic_ramp(t, ramp, r, dr, ddr);
   for (int i = 0; i < kNumJoints; ++i) {
     const double w = 2.0 * M_PI * frequency_hz[i];
     const double s = amplitude[i] * (std::sin(w * t + phase[i]) - std::sin(phase[i]));

@@ -51,11 +51,24 @@ inline constexpr std::array<double, 3> kBandEdges = {0.5, 2.0, 5.0};
 struct UnexplainedStructure {
   int joint = 0;        // 1-based
   std::string kind;     // offset, time_drift, time_periodic, position_periodic, velocity_sign, velocity,
-                        // hysteresis, acceleration, torque_level, high_frequency
+                        // hysteresis, acceleration, torque_level, high_frequency, motion_periodic, transient
   double size = 0.0;    // RMS of the structure's fitted torque [N m]
   double share = 0.0;   // of the joint's remaining held-out mean square it accounts for
-  double value = 0.0;   // the structure's parameter: period [rad], frequency [Hz], slope, ...
+  double value = 0.0;   // the structure's parameter: period [rad], frequency [Hz], slope, start [s] ...
   std::string detail;   // one plain sentence
+};
+
+// A short disturbance in one part: a few stretches of the residual left after the causes far above
+// the rest (docs/gap.md, "Backward check").
+inline constexpr double kTransientWindow = 0.5;  // [s] the stretches
+inline constexpr double kTransientRatio = 10.0;  // mean square above this many times the median stretch's
+inline constexpr double kTransientShare = 0.25;  // at most this fraction of a part's stretches, or it is no transient
+struct Transient {
+  bool heldout = false;          // in the held-out part (else the training part)
+  double start = 0.0, end = 0.0; // [s], the log's time
+  int joint = 0;                 // 1-based: the joint it is largest on
+  double size = 0.0;             // RMS of the residual left on that joint during it [N m]
+  double share = 0.0;            // of that joint's mean square left in its part
 };
 
 struct Diagnosis {
@@ -70,7 +83,8 @@ struct Diagnosis {
   double unexplained_fraction = 1.0;       // held-out mean square left by the selected causes
   nlohmann::json verdict_params;           // the causes' parameters fitted together
   Eigen::VectorXd verdict_heldout_torque;  // the causes' torque on the held-out part (stacked)
-  std::vector<UnexplainedStructure> unexplained;  // strongest first
+  std::vector<UnexplainedStructure> unexplained;  // strongest first (transients too, kind "transient")
+  std::vector<Transient> transients;              // left out of the backward check
 };
 
 // The structures of the residual `left` (stacked, on `part`) that account for at least

@@ -1,6 +1,7 @@
 // "Real" logs for checking the diagnosis on data whose effect is known: a truth model = the
 // diagnosing model plus injected effects, driven along a Fourier excitation trajectory within the
-// joint limits, with sensor noise like the real Panda log's. Built on the dynamics core only.
+// joint limits, with sensor noise like the real Panda log's. Built on the dynamics core only (the
+// same check with the emulated robot in the way is tests/gap_emulated.hpp: gap does not link rt).
 #pragma once
 
 #include <optional>
@@ -43,6 +44,35 @@ InjectedEffects outside_library_effect(unsigned seed);
 // Both injections (each sets different fields).
 InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b);
 
+// The truth's model: the diagnosing model with the injected links, payload and base tilt (its
+// friction stays the model's: the injected friction is added by each generator).
+ModelParameters truth_parameters(const Model& model, const InjectedEffects& truth);
+
+// The injected effects that are physical joint torques beyond a rigid-body model with sliding and
+// static friction: position ripple, Dahl hysteresis, load-dependent friction and the outside-library
+// vibration. Both generators use it: the dynamics core's adds it to the truth's inverse dynamics, the
+// emulated robot's plant takes it as its extra joint torque (csp::rt::PlantTorque). Allocation-free.
+class InjectedJointTorque {
+ public:
+  // Dahl's friction as the library's friction_hysteresis effect has it (the part beyond the sliding
+  // law, amplitude (z - sgn(dq))), or whole (amplitude z: the physical friction, passive, which a
+  // plant integrated in closed loop needs; the excess alone is an anti-friction near rest).
+  enum class Dahl { kBeyondSliding, kWhole };
+  explicit InjectedJointTorque(const InjectedEffects& truth, Dahl dahl = Dahl::kBeyondSliding)
+      : truth_(truth), dahl_(dahl) {}
+  // At time t [s] and joint state (q, dq), tau_transmitted the torque the gears transmit. Calls
+  // follow the motion in time: each advances Dahl's friction state from the last call's position.
+  Vector7 operator()(double t, const Vector7& q, const Vector7& dq, const Vector7& tau_transmitted);
+  // Whether the truth has any of these effects.
+  static bool present(const InjectedEffects& truth);
+
+ private:
+  InjectedEffects truth_;
+  Dahl dahl_;
+  bool started_ = false;
+  Vector7 z_ = Vector7::Zero(), q_previous_ = Vector7::Zero();  // Dahl's state and where it was
+};
+
 // The generator's excitation: a finite Fourier series per joint (as Gaz et al.'s real trajectories),
 // q(t) = centre + sum_l a_l sin(l w t) + b_l cos(l w t), l = 1..5, scaled per joint to stay within
 // 80 % of the position range, 70 % of the velocity limit and 40 % of the acceleration limit.
@@ -51,6 +81,7 @@ class FourierExcitation {
  public:
   FourierExcitation(const JointLimits& limits, unsigned seed, double period = 10.0);
   void state(double t, Vector7& q, Vector7& dq, Vector7& ddq) const;
+  const Vector7& centre() const { return centre_; }  // the series oscillates about it
 
  private:
   static constexpr int kHarmonics = 5;

@@ -26,6 +26,9 @@ struct Part {
 
 Part evaluate_part(const Model& model, const InertialRegressor& regressor, Samples samples);
 
+// The samples of `part` where keep[k] (the uniform grid stays whole: the fast laws run along it).
+Part subset(const Part& part, const std::vector<bool>& keep);
+
 // Stack / unstack per-sample joint vectors.
 Eigen::VectorXd stack(const std::vector<Vector7>& series);
 Vector7 joint_mean_square(const Eigen::VectorXd& stacked);

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -101,6 +102,14 @@ struct ExternalWrench {
   double start = 0.0, end = 0.0, ramp = 0.0;
 };
 
+// A joint torque the plant's rigid-body and friction models do not have, for a test that injects
+// an effect the emulator does not model (a torque ripple periodic in position, a friction with
+// memory, a structural vibration). It acts on the links as the friction does, so the torque sensor
+// feels it; it is evaluated in every integration substep at the substep's time t [s] and state, and
+// tau_motor is the torque the drive transmits. It runs inside the 1 kHz loop: no allocation, no
+// blocking. Empty (the default): none.
+using PlantTorque = std::function<Vector7(double t, const Vector7& q, const Vector7& dq, const Vector7& tau_motor)>;
+
 struct EmulatorSettings {
   ModelParameters plant;                 // the arm (inertia, friction, armature, load, limits, gravity)
   ModelParameters internal;              // the robot's own model (may use another inertial set)
@@ -117,6 +126,7 @@ struct EmulatorSettings {
   Vector7 joint_stiffness = default_joint_stiffness();
   Vector6 cartesian_stiffness = default_cartesian_stiffness();   // K-frame axes x y z R P Y
   std::vector<ExternalWrench> external_wrenches;
+  PlantTorque extra_joint_torque;        // off by default; not settable from a scenario file
 };
 
 // Cumulative counts over the emulator's life.

@@ -14,6 +14,10 @@
 
 namespace csp::rt {
 
+// A quintic ramp from 0 to 1 over `duration` [s] (1 after it) with its first and second time
+// derivatives, all smooth: r(x) = 10x^3 - 15x^4 + 6x^5, x = t / duration; r' and r'' vanish at both ends.
+void quintic_ramp(double t, double duration, double& r, double& dr, double& ddr);
+
 // The scenario controller's reference: one sine per joint around the start pose, ramped in,
 // q_d = q0 + r(t) A (sin(2 pi f t + phase) - sin(phase)), r a quintic ramp from 0 to 1 over
 // `ramp` seconds, so q_d starts at q0 at rest.
