@@ -2,7 +2,9 @@
 // finite differences of the constraints, KDL's forward kinematics of the IK results, the skin,
 // trocar and burr geometry recomputed from the scene at every 1 kHz sample, and a dense re-check by
 // a ClearanceChecker of its own.
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <string>
 #include <vector>
@@ -150,6 +152,116 @@ TEST(TaskStates, AnchorsMatchTheScenesNamedHoverPoses) {
     EXPECT_TRUE(planners::ik_branch(model, anchor) == planners::ik_branch(model, named));
     // Same TCP, same branch; the redundancy (null-space term) may differ: reported, not asserted.
     RecordProperty(c.scene + "_" + c.pose + "_joint_distance", std::to_string((anchor - named).norm()));
+  }
+}
+
+// ---------------- The planned, timed task path at 1 kHz ----------------
+
+// The skin's inward normal and distance at p, recomputed from the scene's obstacle (capsule core).
+struct SkinPoint {
+  double distance;
+  Vector3 inward;
+};
+SkinPoint skin_at(const Capsule& c, const Vector3& p) {
+  const Vector3 d = c.b - c.a;
+  const double t = std::clamp((p - c.a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  const Vector3 r = p - (c.a + t * d);
+  return {r.norm() - c.radius, -r.normalized()};
+}
+
+double angle(const Vector3& a, const Vector3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+
+#ifdef CSP_TASK_TESTS_REDUCED
+const std::vector<std::string> kPathScenes = {"mis_rcm"};   // sanitized build: the OMPL set-up and solve once
+#else
+const std::vector<std::string> kPathScenes = kScenes;
+#endif
+
+TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
+  for (const auto& name : kPathScenes) {
+    SCOPED_TRACE(name);
+    const Scene scene = planners::load_scene(scene_file(name));
+    const Model model = scene_model("panda", scene);
+    const planners::TaskPathOptions options;
+    const planners::TaskPath path = planners::plan_task_path(scene, model, options);
+    const JointLog& log = path.log;
+    ASSERT_GT(log.t.size(), 1000u);
+    std::cout << name << ": " << path.waypoints.size() << " waypoints, " << path.states.size() << " states, "
+              << path.iterations << " iterations, " << path.planning_seconds << " s planning, duration " << path.duration
+              << " s\n";
+
+    // Dense states: joint steps <= delta.
+    for (std::size_t i = 1; i < path.states.size(); ++i)
+      EXPECT_LE((path.states[i] - path.states[i - 1]).cwiseAbs().maxCoeff(), options.delta + 1e-12);
+
+    // Rest to rest; limits with the fractions asked (jerk by finite differences at 1 kHz, as the robot sees it).
+    const JointLimits& limits = model.parameters().joint_limits;
+    EXPECT_LT(log.dq.front().norm(), 1e-9);
+    EXPECT_LT(log.dq.back().norm(), 1e-9);
+    EXPECT_LT(log.ddq.front().norm(), 1e-9);
+    EXPECT_LT(log.ddq.back().norm(), 1e-6);
+    double worst_v = 0.0, worst_a = 0.0, worst_j = 0.0;
+    for (std::size_t k = 0; k < log.t.size(); ++k) {
+      EXPECT_NEAR(log.t[k], 1e-3 * static_cast<double>(k), 1e-12);
+      worst_v = std::max(worst_v, (log.dq[k].cwiseAbs().array() / limits.dq_max.array()).maxCoeff());
+      worst_a = std::max(worst_a, (log.ddq[k].cwiseAbs().array() / limits.ddq_max.array()).maxCoeff());
+      if (k > 0) worst_j = std::max(worst_j, ((log.ddq[k] - log.ddq[k - 1]).cwiseAbs().array() / 1e-3 / limits.dddq_max.array()).maxCoeff());
+      EXPECT_TRUE((log.q[k].array() >= limits.q_min.array()).all() && (log.q[k].array() <= limits.q_max.array()).all());
+    }
+    EXPECT_LE(worst_v, options.velocity_fraction + 1e-9);
+    EXPECT_LE(worst_a, options.acceleration_fraction + 1e-9);
+    EXPECT_LE(worst_j, options.jerk_fraction + 1e-3);
+    std::cout << "  peak fractions of the limits: velocity " << worst_v << ", acceleration " << worst_a << ", jerk " << worst_j << "\n";
+
+    // Every sample valid when re-checked by a checker of its own (the task's contact scene).
+    TaskConstraint task(model, scene);
+    ClearanceChecker checker(model, planners::contact_scene(scene, task.contact_obstacle()));
+    double min_clearance = 1e9;
+    for (const Vector7& q : log.q) min_clearance = std::min(min_clearance, checker.check(q).clearance);
+    EXPECT_GE(min_clearance, 0.0);
+
+    // The task geometry at every sample, from KDL's forward kinematics and the scene's numbers.
+    KdlPeer kdl(model);
+    double worst_position = 0.0, worst_angle = 0.0, peak_speed = 0.0;
+    Vector3 previous = kdl_tcp(kdl, log.q.front()).translation;
+    for (const Vector7& q : log.q) {
+      const Transform T = kdl_tcp(kdl, q);
+      const Vector3 p = T.translation, z = T.rotation.col(2);
+      peak_speed = std::max(peak_speed, (p - previous).norm() / 1e-3);
+      previous = p;
+      if (const auto* scan = std::get_if<planners::UltrasoundScan>(&scene.task)) {
+        const auto& skin = std::get<Capsule>(std::find_if(scene.obstacles.begin(), scene.obstacles.end(), [&](const auto& o) {
+                                               return o.name == task.contact_obstacle();
+                                             })->shape);
+        const SkinPoint sp = skin_at(skin, p);
+        const Vector3 line = (scan->end - scan->start).normalized();
+        const Vector3 off_line = (p - scan->start) - (p - scan->start).dot(line) * line;
+        worst_position = std::max({worst_position, std::abs(sp.distance), off_line.norm()});
+        worst_angle = std::max(worst_angle, angle(z, sp.inward));
+      } else if (const auto* rcm = std::get_if<planners::RcmPivot>(&scene.task)) {
+        worst_position = std::max(worst_position, (rcm->trocar - p).cross(z).norm());
+        const double insertion = z.dot(p - rcm->trocar);
+        EXPECT_TRUE(insertion >= rcm->insertion_min - 1e-9 && insertion <= rcm->insertion_max + 1e-9) << insertion;
+        EXPECT_LE(angle(z, -Vector3::UnitZ()), rcm->max_pivot + 1e-9);
+      } else {
+        const auto& burr = std::get<planners::BurrHole>(scene.task);
+        worst_position = std::max(worst_position, (p - burr.entry).cross(burr.axis).norm());
+        worst_angle = std::max(worst_angle, angle(z, -burr.axis));
+      }
+    }
+    EXPECT_LE(worst_position, 1e-4);   // issue 13: within 0.1 mm
+    EXPECT_LE(worst_angle, 1e-3);
+    std::cout << "  worst distance from the task geometry " << worst_position << " m, worst axis angle " << worst_angle
+              << " rad, min clearance " << min_clearance << " m, peak TCP speed " << peak_speed << " m/s\n";
+
+    // Timed along the task: the scan at its speed; the drill ends advanced by `advance` past its standoff.
+    const Transform end = kdl_tcp(kdl, log.q.back());
+    if (const auto* scan = std::get_if<planners::UltrasoundScan>(&scene.task)) {
+      EXPECT_NEAR(peak_speed, scan->speed, 1e-3 * scan->speed);
+      EXPECT_LT((end.translation - scan->end).norm(), 1e-4);
+    } else if (const auto* burr = std::get_if<planners::BurrHole>(&scene.task)) {
+      EXPECT_NEAR(burr->axis.dot(end.translation - burr->entry), burr->standoff - burr->advance, 1e-6);
+    }
   }
 }
 

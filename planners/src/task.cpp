@@ -5,8 +5,11 @@
 #include <limits>
 #include <sstream>
 
+#include <unsupported/Eigen/Splines>
+
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/dynamics/geometry.hpp"
+#include "csp/planners/ompl_bridge.hpp"
 
 namespace csp::planners {
 namespace {
@@ -309,6 +312,304 @@ TaskStates task_states(TaskConstraint& task, ClearanceChecker& contact_checker, 
   if ((task.anchor_target(task.progress_end()).position - task.anchor_target(task.progress_start()).position).norm() > 1e-9)
     states.anchors.push_back(task_anchor(task, task.progress_end(), states.end, scene_checker));
   return states;
+}
+
+namespace {
+
+// ---- Geometry of the path: dense states on the manifold, then q(progress) ----
+
+// Newton projection of q onto the manifold (minimum-norm steps, no secondary objective).
+Vector7 project(TaskConstraint& task, const Vector7& q, const JointLimits& limits) {
+  IkOptions options;
+  options.max_iterations = 50;
+  options.tolerance = 1e-10;
+  options.limit_margin = 0.0;
+  const IkResult r = solve_ik(task.rows(), q, limits, nullptr, options);
+  if (!r.converged)
+    throw TaskError(task.scene().path + ": task: a path state does not project onto the constraint manifold (|f| " +
+                    std::to_string(r.residual) + ")");
+  return r.q;
+}
+
+// The planner's states, cut so that no joint moves more than delta/2 between two, each projected.
+std::vector<Vector7> densify(TaskConstraint& task, const std::vector<Vector7>& waypoints, double delta,
+                             const JointLimits& limits) {
+  std::vector<Vector7> states{waypoints.front()};
+  for (std::size_t i = 1; i < waypoints.size(); ++i) {
+    const Vector7 step = waypoints[i] - waypoints[i - 1];
+    if (step.isZero(0.0)) continue;
+    const int n = std::max(1, static_cast<int>(std::ceil(step.cwiseAbs().maxCoeff() / (0.5 * delta))));
+    for (int k = 1; k <= n; ++k)
+      states.push_back(project(task, waypoints[i - 1] + (static_cast<double>(k) / n) * step, limits));
+  }
+  return states;
+}
+
+using JointSpline = Eigen::Spline<double, kNumJoints>;
+
+// q as a quintic B-spline of the progress, through the path resampled at uniform progress steps
+// (each sample linearly interpolated in progress between the two dense states around it, then
+// projected): uniform knots keep the interpolation well conditioned.
+struct ProgressPath {
+  JointSpline spline;
+  double from = 0.0, to = 0.0;   // progress at u = 0 and u = 1
+  // q and its first three derivatives with respect to the progress.
+  std::array<Vector7, 4> at(double progress) const {
+    const double scale = 1.0 / (to - from);
+    const auto d = spline.derivatives(std::clamp((progress - from) * scale, 0.0, 1.0), 3);
+    std::array<Vector7, 4> out;
+    double factor = 1.0;
+    for (int k = 0; k < 4; ++k, factor *= scale) out[static_cast<std::size_t>(k)] = d.col(k) * factor;
+    return out;
+  }
+};
+
+ProgressPath progress_path(TaskConstraint& task, const std::vector<Vector7>& states, const std::vector<double>& progress,
+                           double delta, const JointLimits& limits) {
+  double travel = 0.0;
+  for (std::size_t i = 1; i < states.size(); ++i) travel += (states[i] - states[i - 1]).cwiseAbs().maxCoeff();
+  const int n = std::max(8, static_cast<int>(std::ceil(travel / delta)));
+  Eigen::Matrix<double, kNumJoints, Eigen::Dynamic> points(kNumJoints, n + 1);
+  Eigen::RowVectorXd knots(n + 1);
+  ProgressPath path{JointSpline(), progress.front(), progress.back()};
+  const double sign = path.to > path.from ? 1.0 : -1.0;
+  std::size_t i = 1;
+  for (int k = 0; k <= n; ++k) {
+    const double u = static_cast<double>(k) / n;
+    const double s = path.from + u * (path.to - path.from);
+    while (i + 1 < progress.size() && sign * (progress[i] - s) < 0.0) ++i;
+    const double w = std::clamp((s - progress[i - 1]) / (progress[i] - progress[i - 1]), 0.0, 1.0);
+    const Vector7 q = states[i - 1] + w * (states[i] - states[i - 1]);
+    points.col(k) = (k == 0 || k == n) ? q : project(task, q, limits);
+    knots[k] = u;
+  }
+  path.spline = Eigen::SplineFitting<JointSpline>::Interpolate(points, 5, knots);
+  return path;
+}
+
+// ---- Timing: the progress as a function of time ----
+
+// The septic rest-to-rest step s(u) = 35u^4 - 84u^5 + 70u^6 - 20u^7 (zero velocity, acceleration
+// and jerk at both ends); peaks of its first three derivatives: 2.1875, 7.5132, 52.5.
+struct Septic {
+  static constexpr double kPeak1 = 2.1875, kPeak2 = 7.5132, kPeak3 = 52.5;
+  static std::array<double, 4> at(double u) {   // s and its first three derivatives
+    const double u2 = u * u, u3 = u2 * u, u4 = u3 * u;
+    return {u4 * (35.0 - 84.0 * u + 70.0 * u2 - 20.0 * u3), u3 * (140.0 - 420.0 * u + 420.0 * u2 - 140.0 * u3),
+            u2 * (420.0 - 1680.0 * u + 2100.0 * u2 - 840.0 * u3), u * (840.0 - 5040.0 * u + 8400.0 * u2 - 4200.0 * u3)};
+  }
+  static double integral(double u) {   // int_0^u s, = 1/2 at u = 1
+    const double u5 = u * u * u * u * u;
+    return u5 * (7.0 - 14.0 * u + 10.0 * u * u - 2.5 * u * u * u);
+  }
+};
+
+// One piece of the time law: rest to rest (septic in time) from `from` to `to`, or at constant
+// speed with septic velocity ramps of `ramp` seconds at both ends.
+struct TimedSegment {
+  double from = 0.0, to = 0.0;
+  double speed = 0.0;   // > 0: cruise at this speed [progress/s]
+  double duration = 0.0, ramp = 0.0;
+
+  // The progress and its first three time derivatives at time t in [0, duration].
+  std::array<double, 4> at(double t) const {
+    if (speed <= 0.0) {
+      const auto s = Septic::at(std::clamp(t / duration, 0.0, 1.0));
+      const double d = to - from;
+      return {from + d * s[0], d * s[1] / duration, d * s[2] / (duration * duration), d * s[3] / (duration * duration * duration)};
+    }
+    const double v = (to > from ? 1.0 : -1.0) * speed, cruise_end = duration - ramp;
+    if (t < ramp) {   // velocity v s(t/ramp)
+      const double u = std::max(t, 0.0) / ramp;
+      const auto s = Septic::at(u);
+      return {from + v * ramp * Septic::integral(u), v * s[0], v * s[1] / ramp, v * s[2] / (ramp * ramp)};
+    }
+    if (t <= cruise_end) return {from + v * (0.5 * ramp + (t - ramp)), v, 0.0, 0.0};
+    const double u = std::min((t - cruise_end) / ramp, 1.0);   // velocity v (1 - s(u))
+    const auto s = Septic::at(u);
+    return {from + v * (0.5 * ramp + (cruise_end - ramp) + ramp * (u - Septic::integral(u))), v * (1.0 - s[0]),
+            -v * s[1] / ramp, -v * s[2] / (ramp * ramp)};
+  }
+};
+
+// Per joint, the maxima over the progress range of |dq/ds|, |d2q/ds2|, |d3q/ds3| (dense sampling).
+std::array<Vector7, 3> path_derivative_bounds(const ProgressPath& path, double from, double to) {
+  std::array<Vector7, 3> bound{Vector7::Zero(), Vector7::Zero(), Vector7::Zero()};
+  constexpr int kSamples = 2000;
+  for (int k = 0; k <= kSamples; ++k) {
+    const auto d = path.at(from + (to - from) * k / kSamples);
+    for (std::size_t i = 0; i < 3; ++i) bound[i] = bound[i].cwiseMax(d[i + 1].cwiseAbs());
+  }
+  return bound;
+}
+
+double ceil_ms(double t) { return std::ceil(t * 1000.0 - 1e-9) / 1000.0; }
+
+// The shortest rest-to-rest duration (at least `minimum`) whose joint velocity, acceleration and jerk
+// stay within v, a, j, by the chain rule with each factor at its peak (a guaranteed bound), D = |to - from|:
+//   |dq| <= Q1 p1 D/T,  |ddq| <= (Q2 p1^2 D^2 + Q1 p2 D)/T^2,  |dddq| <= (Q3 p1^3 D^3 + 3 Q2 p1 p2 D^2 + Q1 p3 D)/T^3
+double rest_to_rest_duration(const std::array<Vector7, 3>& Q, double D, const Vector7& v, const Vector7& a,
+                             const Vector7& j, double minimum) {
+  using S = Septic;
+  double T = minimum;
+  for (int i = 0; i < kNumJoints; ++i) {
+    T = std::max(T, Q[0][i] * S::kPeak1 * D / v[i]);
+    T = std::max(T, std::sqrt((Q[1][i] * S::kPeak1 * S::kPeak1 * D * D + Q[0][i] * S::kPeak2 * D) / a[i]));
+    T = std::max(T, std::cbrt((Q[2][i] * std::pow(S::kPeak1 * D, 3) + 3.0 * Q[1][i] * S::kPeak1 * S::kPeak2 * D * D +
+                               Q[0][i] * S::kPeak3 * D) / j[i]));
+  }
+  return ceil_ms(T);
+}
+
+// A constant-speed segment: the shortest velocity ramp R (at least `minimum`) within the limits, with
+//   |dq| <= Q1 V,  |ddq| <= Q2 V^2 + Q1 p1 V/R,  |dddq| <= Q3 V^3 + 3 Q2 p1 V^2/R + Q1 p2 V/R^2.
+// Throws when the speed itself, or the ramps that fit in the segment, exceed the limits.
+TimedSegment cruise_segment(const std::string& where, const std::array<Vector7, 3>& Q, double from, double to,
+                            double speed, const Vector7& v, const Vector7& a, const Vector7& j, double minimum) {
+  using S = Septic;
+  const double L = std::abs(to - from);
+  const auto fits = [&](double R) {
+    for (int i = 0; i < kNumJoints; ++i) {
+      if (Q[0][i] * speed > v[i]) return false;
+      if (Q[1][i] * speed * speed + Q[0][i] * S::kPeak1 * speed / R > a[i]) return false;
+      if (Q[2][i] * std::pow(speed, 3) + 3.0 * Q[1][i] * S::kPeak1 * speed * speed / R + Q[0][i] * S::kPeak2 * speed / (R * R) > j[i])
+        return false;
+    }
+    return true;
+  };
+  double R = minimum;
+  while (!fits(R) && R * speed < L) R *= 1.25;
+  R = std::min(ceil_ms(R), L / speed);
+  if (!fits(R)) throw TaskError(where + ": the task speed " + std::to_string(speed) + " exceeds the joint limits along the path");
+  return {from, to, speed, R + L / speed, R};   // the two half ramps cover speed R, the cruise the rest
+}
+
+}  // namespace
+
+TaskPath plan_task_path(const Scene& scene, const Model& model, const TaskPathOptions& options) {
+  TaskConstraint task(model, scene);
+  ClearanceChecker contact(model, contact_scene(scene, task.contact_obstacle()));
+  ClearanceChecker plain(model, scene);
+  const JointLimits& limits = model.parameters().joint_limits;
+  const std::string where = scene.path + ": task";
+
+  TaskPath path;
+  path.scene = scene.name;
+  path.codim = task.codim();
+  const TaskStates states = task_states(task, contact, plain);
+  path.start = states.start;
+  path.end = states.end;
+  path.anchors = states.anchors;
+
+  // The path on the manifold (OMPL, planners/ompl_bridge).
+  ompl_bridge::Request request;
+  Vector7::Map(request.start.data()) = states.start;
+  Vector7::Map(request.goal.data()) = states.end;
+  Vector7::Map(request.lower.data()) = limits.q_min;
+  Vector7::Map(request.upper.data()) = limits.q_max;
+  request.seed = options.seed;
+  request.max_iterations = options.max_iterations;
+  request.range = options.range;
+  request.simplify_steps = options.simplify_steps;
+  ompl_bridge::Callbacks callbacks;
+  callbacks.is_valid = [&](const ompl_bridge::Joints& q) {
+    const Vector7 v = Vector7::Map(q.data());
+    return contact.is_valid(v) && task.within_ranges(v);
+  };
+  ompl_bridge::ManifoldConstraint constraint;
+  constraint.codimension = task.codim();
+  constraint.tolerance = options.tolerance;
+  constraint.delta = options.delta;
+  Eigen::VectorXd f;
+  Eigen::MatrixXd J;
+  constraint.function = [&](const double* q, double* out) {
+    task.evaluate(Vector7::Map(q), f, J);
+    Eigen::VectorXd::Map(out, f.size()) = f;
+  };
+  if (options.analytic_jacobian)
+    constraint.jacobian = [&](const double* q, double* out) {
+      task.evaluate(Vector7::Map(q), f, J);
+      Eigen::Matrix<double, Eigen::Dynamic, kNumJoints, Eigen::RowMajor>::Map(out, J.rows(), kNumJoints) = J;
+    };
+  const ompl_bridge::Result planned = ompl_bridge::plan_on_manifold(request, callbacks, constraint);
+  path.iterations = static_cast<int>(planned.iterations);
+  path.planning_seconds = planned.seconds;
+  if (!planned.solved) throw TaskError(where + ": no path on the constraint manifold: " + planned.message);
+  for (const auto& q : planned.waypoints) path.waypoints.push_back(Vector7::Map(q.data()));
+
+  // Dense states on the manifold, each valid and each chord certified free.
+  path.states = densify(task, path.waypoints, options.delta, limits);
+  for (std::size_t i = 0; i < path.states.size(); ++i) {
+    const Vector7& q = path.states[i];
+    if (!contact.is_valid(q) || !task.within_ranges(q) || (i > 0 && !contact.motion_is_free(path.states[i - 1], q)))
+      throw TaskError(where + ": the densified path leaves the free space at state " + std::to_string(i));
+    path.progress.push_back(task.progress(q));
+  }
+  // The path parameter the time law runs along: the task progress (scan distance, drill height),
+  // which must then advance at every state; for the rcm sweep (5-D manifold: the other pivot
+  // direction, the insertion and the roll are free) the path's joint-space arc length.
+  const bool by_arc_length = std::holds_alternative<RcmPivot>(scene.task);
+  std::vector<double> parameter{by_arc_length ? 0.0 : path.progress.front()};
+  for (std::size_t i = 1; i < path.states.size(); ++i) {
+    parameter.push_back(by_arc_length ? parameter.back() + (path.states[i] - path.states[i - 1]).norm() : path.progress[i]);
+    const double sign = by_arc_length || task.progress_end() > task.progress_start() ? 1.0 : -1.0;
+    if (sign * (parameter[i] - parameter[i - 1]) <= 0.0)
+      throw TaskError(where + ": the planned path does not advance along the task at state " + std::to_string(i) +
+                      " (progress " + std::to_string(parameter[i - 1]) + " -> " + std::to_string(parameter[i]) + ")");
+  }
+  const ProgressPath geometry = progress_path(task, path.states, parameter, options.delta, limits);
+
+  // The time law along the task.
+  const Vector7 v = options.velocity_fraction * limits.dq_max;
+  const Vector7 a = options.acceleration_fraction * limits.ddq_max;
+  const Vector7 jerk = options.jerk_fraction * limits.dddq_max;
+  constexpr double kMinimum = 1.0;   // no segment or ramp shorter than 1 s near the patient
+  std::vector<TimedSegment> segments;
+  const auto rest_to_rest = [&](double from, double to) {
+    const double T = rest_to_rest_duration(path_derivative_bounds(geometry, from, to), std::abs(to - from), v, a, jerk, kMinimum);
+    segments.push_back({from, to, 0.0, T, 0.0});
+  };
+  const auto cruise = [&](double from, double to, double speed) {
+    segments.push_back(cruise_segment(where, path_derivative_bounds(geometry, from, to), from, to, speed, v, a, jerk, kMinimum));
+  };
+  if (const auto* scan = std::get_if<UltrasoundScan>(&scene.task)) {
+    cruise(task.progress_start(), task.progress_end(), scan->speed);
+  } else if (by_arc_length) {
+    rest_to_rest(0.0, parameter.back());
+  } else {
+    const auto& burr = std::get<BurrHole>(scene.task);
+    rest_to_rest(task.progress_start(), burr.standoff);
+    cruise(burr.standoff, task.progress_end(), burr.speed);
+  }
+
+  // Sampled at rate_hz: q = Q(s(t)), dq = Q' s', ddq = Q'' s'^2 + Q' s''.
+  JointLog& log = path.log;
+  log.source = "task path " + scene.name;
+  Data data;
+  double offset = 0.0;
+  long k = 0;
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const TimedSegment& segment = segments[i];
+    const bool last = i + 1 == segments.size();
+    for (;; ++k) {
+      const double t = static_cast<double>(k) / options.rate_hz;
+      if (t > offset + segment.duration + 1e-9 || (!last && t >= offset + segment.duration - 1e-9)) break;
+      const auto s = segment.at(t - offset);
+      const auto Q = geometry.at(s[0]);
+      const Vector7 dq = Q[1] * s[1];
+      const Vector7 ddq = Q[2] * s[1] * s[1] + Q[1] * s[2];
+      Vector7 tau;
+      rnea(model, data, Q[0], dq, ddq, tau);
+      log.t.push_back(t);
+      log.q.push_back(Q[0]);
+      log.dq.push_back(dq);
+      log.ddq.push_back(ddq);
+      log.tau_J.push_back(tau + friction_torque(model.parameters().friction, dq));
+    }
+    offset += segment.duration;
+  }
+  path.duration = offset;
+  return path;
 }
 
 }  // namespace csp::planners

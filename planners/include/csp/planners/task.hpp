@@ -105,6 +105,8 @@ Scene contact_scene(const Scene& scene, const std::string& contact_obstacle);
 struct TaskPathOptions {
   unsigned seed = 1;
   int max_iterations = 20000;          // RRTConnect iterations (deterministic cap)
+  double range = 0.3;                  // RRTConnect's step [rad]: each step is cut into delta-long projected steps
+  int simplify_steps = 20;             // shortcut attempts (each a geodesic of projected steps)
   double delta = 0.01;                 // step on the manifold and max joint step of the dense path [rad]
   double tolerance = 1e-6;             // constraint tolerance of the projection (|f|) [m]
   bool analytic_jacobian = true;       // false: OMPL's numerical Jacobian (the benchmark's baseline)
