@@ -443,6 +443,21 @@ std::array<Vector7, 3> path_derivative_bounds(const ProgressPath& path, double f
   return bound;
 }
 
+// The maximum over the progress range of the TCP's rate |dp/ds| (finite differences between dense samples).
+double tcp_rate_bound(const Model& model, const ProgressPath& path, double from, double to) {
+  Data data;
+  constexpr int kSamples = 2000;
+  double bound = 0.0;
+  Vector3 previous = Vector3::Zero();
+  for (int k = 0; k <= kSamples; ++k) {
+    forward_kinematics(model, data, path.at(from + (to - from) * k / kSamples)[0]);
+    const Vector3 p = frame_pose(data, Frame::kEndEffector).translation;
+    if (k > 0) bound = std::max(bound, (p - previous).norm() / (std::abs(to - from) / kSamples));
+    previous = p;
+  }
+  return bound;
+}
+
 double ceil_ms(double t) { return std::ceil(t * 1000.0 - 1e-9) / 1000.0; }
 
 // The shortest rest-to-rest duration (at least `minimum`) whose joint velocity, acceleration and jerk
@@ -505,8 +520,10 @@ TaskPath plan_task_path(const Scene& scene, const Model& model, const TaskPathOp
   ompl_bridge::Request request;
   Vector7::Map(request.start.data()) = states.start;
   Vector7::Map(request.goal.data()) = states.end;
-  Vector7::Map(request.lower.data()) = limits.q_min;
-  Vector7::Map(request.upper.data()) = limits.q_max;
+  // The joints stay within the task's range +- joint_margin (planning-notes section 1, the task
+  // envelope): random samples near the task keep OMPL's geodesics toward them short.
+  Vector7::Map(request.lower.data()) = (states.start.cwiseMin(states.end).array() - options.joint_margin).max(limits.q_min.array());
+  Vector7::Map(request.upper.data()) = (states.start.cwiseMax(states.end).array() + options.joint_margin).min(limits.q_max.array());
   request.seed = options.seed;
   request.max_iterations = options.max_iterations;
   request.range = options.range;
@@ -566,7 +583,10 @@ TaskPath plan_task_path(const Scene& scene, const Model& model, const TaskPathOp
   constexpr double kMinimum = 1.0;   // no segment or ramp shorter than 1 s near the patient
   std::vector<TimedSegment> segments;
   const auto rest_to_rest = [&](double from, double to) {
-    const double T = rest_to_rest_duration(path_derivative_bounds(geometry, from, to), std::abs(to - from), v, a, jerk, kMinimum);
+    const double D = std::abs(to - from);
+    // and the TCP no faster than tool_speed: |dp/dt| <= P1 p1 D/T
+    const double tool = Septic::kPeak1 * D * tcp_rate_bound(model, geometry, from, to) / options.tool_speed;
+    const double T = rest_to_rest_duration(path_derivative_bounds(geometry, from, to), D, v, a, jerk, std::max(kMinimum, tool));
     segments.push_back({from, to, 0.0, T, 0.0});
   };
   const auto cruise = [&](double from, double to, double speed) {

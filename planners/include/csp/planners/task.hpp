@@ -105,6 +105,7 @@ Scene contact_scene(const Scene& scene, const std::string& contact_obstacle);
 struct TaskPathOptions {
   unsigned seed = 1;
   int max_iterations = 20000;          // RRTConnect iterations (deterministic cap)
+  double joint_margin = 0.5;           // the planner's joint bounds: the task's start and end +- this [rad]
   double range = 0.3;                  // RRTConnect's step [rad]: each step is cut into delta-long projected steps
   int simplify_steps = 20;             // shortcut attempts (each a geodesic of projected steps)
   double delta = 0.01;                 // step on the manifold and max joint step of the dense path [rad]
@@ -113,6 +114,7 @@ struct TaskPathOptions {
   double velocity_fraction = 0.5;      // of the model's dq_max, ddq_max, dddq_max
   double acceleration_fraction = 0.5;
   double jerk_fraction = 0.5;
+  double tool_speed = 0.02;            // TCP speed cap of the segments the task gives no speed (rcm sweep, drill approach) [m/s]
   double rate_hz = 1000.0;
 };
 
