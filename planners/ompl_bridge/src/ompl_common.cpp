@@ -183,7 +183,7 @@ ob::PlannerPtr make_planner(const std::string& name, const ob::SpaceInformationP
     if (range > 0.0) planner->setRange(range);
     return planner;
   }
-  if (name == "bitstar") return std::make_shared<og::BITstar>(si);
+  if (name == "bitstar") return std::make_shared<og::BITstar>(si, "kBITstar");   // OMPL's name for its k-nearest default
   // PRM* would be the textbook choice, but OMPL's PRM::solve grows its roadmap in a second thread
   // (nondeterministic); LazyPRM* runs in the caller's thread.
   if (name == "lazyprmstar") {
