@@ -10,6 +10,7 @@
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/dynamics/geometry.hpp"
 #include "csp/planners/ompl_bridge.hpp"
+#include "csp/planners/profile.hpp"
 
 namespace csp::planners {
 namespace {
@@ -389,20 +390,12 @@ ProgressPath progress_path(TaskConstraint& task, const std::vector<Vector7>& sta
 
 // ---- Timing: the progress as a function of time ----
 
-// The septic rest-to-rest step s(u) = 35u^4 - 84u^5 + 70u^6 - 20u^7 (zero velocity, acceleration
-// and jerk at both ends); peaks of its first three derivatives: 2.1875, 7.5132, 52.5.
-struct Septic {
-  static constexpr double kPeak1 = 2.1875, kPeak2 = 7.5132, kPeak3 = 52.5;
-  static std::array<double, 4> at(double u) {   // s and its first three derivatives
-    const double u2 = u * u, u3 = u2 * u, u4 = u3 * u;
-    return {u4 * (35.0 - 84.0 * u + 70.0 * u2 - 20.0 * u3), u3 * (140.0 - 420.0 * u + 420.0 * u2 - 140.0 * u3),
-            u2 * (420.0 - 1680.0 * u + 2100.0 * u2 - 840.0 * u3), u * (840.0 - 5040.0 * u + 8400.0 * u2 - 4200.0 * u3)};
-  }
-  static double integral(double u) {   // int_0^u s, = 1/2 at u = 1
-    const double u5 = u * u * u * u * u;
-    return u5 * (7.0 - 14.0 * u + 10.0 * u * u - 2.5 * u * u * u);
-  }
-};
+// int_0^u s(v) dv of the septic step (profile.hpp): the distance covered by a septic velocity ramp,
+// 1/2 at u = 1.
+double septic_integral(double u) {
+  const double u5 = u * u * u * u * u;
+  return u5 * (7.0 - 14.0 * u + 10.0 * u * u - 2.5 * u * u * u);
+}
 
 // One piece of the time law: rest to rest (septic in time) from `from` to `to`, or at constant
 // speed with septic velocity ramps of `ramp` seconds at both ends.
@@ -414,21 +407,21 @@ struct TimedSegment {
   // The progress and its first three time derivatives at time t in [0, duration].
   std::array<double, 4> at(double t) const {
     if (speed <= 0.0) {
-      const auto s = Septic::at(std::clamp(t / duration, 0.0, 1.0));
+      const SepticSample s = septic(t / duration);
       const double d = to - from;
-      return {from + d * s[0], d * s[1] / duration, d * s[2] / (duration * duration), d * s[3] / (duration * duration * duration)};
+      return {from + d * s.s, d * s.ds / duration, d * s.dds / (duration * duration), d * s.ddds / (duration * duration * duration)};
     }
     const double v = (to > from ? 1.0 : -1.0) * speed, cruise_end = duration - ramp;
     if (t < ramp) {   // velocity v s(t/ramp)
       const double u = std::max(t, 0.0) / ramp;
-      const auto s = Septic::at(u);
-      return {from + v * ramp * Septic::integral(u), v * s[0], v * s[1] / ramp, v * s[2] / (ramp * ramp)};
+      const SepticSample s = septic(u);
+      return {from + v * ramp * septic_integral(u), v * s.s, v * s.ds / ramp, v * s.dds / (ramp * ramp)};
     }
     if (t <= cruise_end) return {from + v * (0.5 * ramp + (t - ramp)), v, 0.0, 0.0};
     const double u = std::min((t - cruise_end) / ramp, 1.0);   // velocity v (1 - s(u))
-    const auto s = Septic::at(u);
-    return {from + v * (0.5 * ramp + (cruise_end - ramp) + ramp * (u - Septic::integral(u))), v * (1.0 - s[0]),
-            -v * s[1] / ramp, -v * s[2] / (ramp * ramp)};
+    const SepticSample s = septic(u);
+    return {from + v * (0.5 * ramp + (cruise_end - ramp) + ramp * (u - septic_integral(u))), v * (1.0 - s.s),
+            -v * s.ds / ramp, -v * s.dds / (ramp * ramp)};
   }
 };
 
@@ -465,13 +458,12 @@ double ceil_ms(double t) { return std::ceil(t * 1000.0 - 1e-9) / 1000.0; }
 //   |dq| <= Q1 p1 D/T,  |ddq| <= (Q2 p1^2 D^2 + Q1 p2 D)/T^2,  |dddq| <= (Q3 p1^3 D^3 + 3 Q2 p1 p2 D^2 + Q1 p3 D)/T^3
 double rest_to_rest_duration(const std::array<Vector7, 3>& Q, double D, const Vector7& v, const Vector7& a,
                              const Vector7& j, double minimum) {
-  using S = Septic;
+  const double p1 = kSepticPeakVelocity, p2 = kSepticPeakAcceleration, p3 = kSepticPeakJerk;
   double T = minimum;
   for (int i = 0; i < kNumJoints; ++i) {
-    T = std::max(T, Q[0][i] * S::kPeak1 * D / v[i]);
-    T = std::max(T, std::sqrt((Q[1][i] * S::kPeak1 * S::kPeak1 * D * D + Q[0][i] * S::kPeak2 * D) / a[i]));
-    T = std::max(T, std::cbrt((Q[2][i] * std::pow(S::kPeak1 * D, 3) + 3.0 * Q[1][i] * S::kPeak1 * S::kPeak2 * D * D +
-                               Q[0][i] * S::kPeak3 * D) / j[i]));
+    T = std::max(T, Q[0][i] * p1 * D / v[i]);
+    T = std::max(T, std::sqrt((Q[1][i] * p1 * p1 * D * D + Q[0][i] * p2 * D) / a[i]));
+    T = std::max(T, std::cbrt((Q[2][i] * std::pow(p1 * D, 3) + 3.0 * Q[1][i] * p1 * p2 * D * D + Q[0][i] * p3 * D) / j[i]));
   }
   return ceil_ms(T);
 }
@@ -481,13 +473,13 @@ double rest_to_rest_duration(const std::array<Vector7, 3>& Q, double D, const Ve
 // Throws when the speed itself, or the ramps that fit in the segment, exceed the limits.
 TimedSegment cruise_segment(const std::string& where, const std::array<Vector7, 3>& Q, double from, double to,
                             double speed, const Vector7& v, const Vector7& a, const Vector7& j, double minimum) {
-  using S = Septic;
+  const double p1 = kSepticPeakVelocity, p2 = kSepticPeakAcceleration;
   const double L = std::abs(to - from);
   const auto fits = [&](double R) {
     for (int i = 0; i < kNumJoints; ++i) {
       if (Q[0][i] * speed > v[i]) return false;
-      if (Q[1][i] * speed * speed + Q[0][i] * S::kPeak1 * speed / R > a[i]) return false;
-      if (Q[2][i] * std::pow(speed, 3) + 3.0 * Q[1][i] * S::kPeak1 * speed * speed / R + Q[0][i] * S::kPeak2 * speed / (R * R) > j[i])
+      if (Q[1][i] * speed * speed + Q[0][i] * p1 * speed / R > a[i]) return false;
+      if (Q[2][i] * std::pow(speed, 3) + 3.0 * Q[1][i] * p1 * speed * speed / R + Q[0][i] * p2 * speed / (R * R) > j[i])
         return false;
     }
     return true;
@@ -585,7 +577,7 @@ TaskPath plan_task_path(const Scene& scene, const Model& model, const TaskPathOp
   const auto rest_to_rest = [&](double from, double to) {
     const double D = std::abs(to - from);
     // and the TCP no faster than tool_speed: |dp/dt| <= P1 p1 D/T
-    const double tool = Septic::kPeak1 * D * tcp_rate_bound(model, geometry, from, to) / options.tool_speed;
+    const double tool = kSepticPeakVelocity * D * tcp_rate_bound(model, geometry, from, to) / options.tool_speed;
     const double T = rest_to_rest_duration(path_derivative_bounds(geometry, from, to), D, v, a, jerk, std::max(kMinimum, tool));
     segments.push_back({from, to, 0.0, T, 0.0});
   };
@@ -602,32 +594,24 @@ TaskPath plan_task_path(const Scene& scene, const Model& model, const TaskPathOp
     cruise(burr.standoff, task.progress_end(), burr.speed);
   }
 
-  // Sampled at rate_hz: q = Q(s(t)), dq = Q' s', ddq = Q'' s'^2 + Q' s''.
-  JointLog& log = path.log;
-  log.source = "task path " + scene.name;
-  Data data;
+  // Sampled at rate_hz by the chain rule (Q1..Q3: derivatives of q along the path, s1..s3: of the
+  // path parameter in time): dq = Q1 s1, ddq = Q2 s1^2 + Q1 s2, dddq = Q3 s1^3 + 3 Q2 s1 s2 + Q1 s3.
   double offset = 0.0;
-  long k = 0;
-  for (std::size_t i = 0; i < segments.size(); ++i) {
-    const TimedSegment& segment = segments[i];
-    const bool last = i + 1 == segments.size();
-    for (;; ++k) {
-      const double t = static_cast<double>(k) / options.rate_hz;
-      if (t > offset + segment.duration + 1e-9 || (!last && t >= offset + segment.duration - 1e-9)) break;
-      const auto s = segment.at(t - offset);
-      const auto Q = geometry.at(s[0]);
-      const Vector7 dq = Q[1] * s[1];
-      const Vector7 ddq = Q[2] * s[1] * s[1] + Q[1] * s[2];
-      Vector7 tau;
-      rnea(model, data, Q[0], dq, ddq, tau);
-      log.t.push_back(t);
-      log.q.push_back(Q[0]);
-      log.dq.push_back(dq);
-      log.ddq.push_back(ddq);
-      log.tau_J.push_back(tau + friction_torque(model.parameters().friction, dq));
-    }
-    offset += segment.duration;
-  }
+  for (const TimedSegment& segment : segments) offset += segment.duration;
+  const auto sample = [&](double t) {
+    std::size_t i = 0;
+    double start = 0.0;
+    while (i + 1 < segments.size() && t >= start + segments[i].duration) start += segments[i++].duration;
+    const auto s = segments[i].at(t - start);
+    const auto Q = geometry.at(s[0]);
+    JointSample out;
+    out.q = Q[0];
+    out.dq = Q[1] * s[1];
+    out.ddq = Q[2] * s[1] * s[1] + Q[1] * s[2];
+    out.dddq = Q[3] * s[1] * s[1] * s[1] + 3.0 * Q[2] * s[1] * s[2] + Q[1] * s[3];
+    return out;
+  };
+  path.log = sampled_joint_log(sample, offset, options.rate_hz, model, "task path " + scene.name);
   path.duration = offset;
   return path;
 }
