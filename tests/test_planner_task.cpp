@@ -178,15 +178,16 @@ const std::vector<std::string> kPathScenes = kScenes;
 #endif
 
 TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
+  for (const std::string robot : {"panda", "fr3"})
   for (const auto& name : kPathScenes) {
-    SCOPED_TRACE(name);
+    SCOPED_TRACE(robot + " " + name);
     const Scene scene = planners::load_scene(scene_file(name));
-    const Model model = scene_model("panda", scene);
+    const Model model = scene_model(robot, scene);
     const planners::TaskPathOptions options;
     const planners::TaskPath path = planners::plan_task_path(scene, model, options);
     const JointLog& log = path.log;
     ASSERT_GT(log.t.size(), 1000u);
-    std::cout << name << ": " << path.waypoints.size() << " waypoints, " << path.states.size() << " states, "
+    std::cout << robot << " " << name << ": " << path.waypoints.size() << " waypoints, " << path.states.size() << " states, "
               << path.iterations << " iterations, " << path.planning_seconds << " s planning, duration " << path.duration
               << " s\n";
 
@@ -207,6 +208,9 @@ TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
       worst_a = std::max(worst_a, (log.ddq[k].cwiseAbs().array() / limits.ddq_max.array()).maxCoeff());
       if (k > 0) worst_j = std::max(worst_j, ((log.ddq[k] - log.ddq[k - 1]).cwiseAbs().array() / 1e-3 / limits.dddq_max.array()).maxCoeff());
       EXPECT_TRUE((log.q[k].array() >= limits.q_min.array()).all() && (log.q[k].array() <= limits.q_max.array()).all());
+      // FR3: the position-based velocity bounds too
+      EXPECT_TRUE((log.dq[k].array() <= limits.dq_upper(log.q[k]).array()).all() &&
+                  (log.dq[k].array() >= limits.dq_lower(log.q[k]).array()).all());
     }
     EXPECT_LE(worst_v, options.velocity_fraction + 1e-9);
     EXPECT_LE(worst_a, options.acceleration_fraction + 1e-9);
@@ -262,6 +266,34 @@ TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
     } else if (const auto* burr = std::get_if<planners::BurrHole>(&scene.task)) {
       EXPECT_NEAR(burr->axis.dot(end.translation - burr->entry), burr->standoff - burr->advance, 1e-6);
     }
+  }
+}
+
+// The same seed gives the same path, sample for sample (iteration caps, no clock).
+TEST(TaskPath, SameSeedSamePath) {
+  const Scene scene = planners::load_scene(scene_file("mis_rcm"));
+  const Model model = scene_model("panda", scene);
+  planners::TaskPathOptions options;
+  options.seed = 7;
+  const planners::TaskPath a = planners::plan_task_path(scene, model, options);
+  const planners::TaskPath b = planners::plan_task_path(scene, model, options);
+  ASSERT_EQ(a.log.q.size(), b.log.q.size());
+  for (std::size_t k = 0; k < a.log.q.size(); ++k) ASSERT_EQ(a.log.q[k], b.log.q[k]) << k;
+  ASSERT_EQ(a.waypoints.size(), b.waypoints.size());
+}
+
+// A scan line that leaves the skin: one error naming the scene and the point.
+TEST(TaskConstraint, ScanOffTheSkinNamesTheSceneAndThePoint) {
+  Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  std::get<planners::UltrasoundScan>(scene.task).end.z() += 0.01;
+  const Model model = scene_model("panda", scene);
+  try {
+    TaskConstraint task(model, scene);
+    FAIL() << "no error";
+  } catch (const planners::TaskError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("ultrasound_abdomen.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("not on the skin of 'torso'"), std::string::npos) << what;
   }
 }
 
