@@ -151,7 +151,8 @@ TEST(TaskStates, AnchorsMatchTheScenesNamedHoverPoses) {
     EXPECT_LT((kdl_tcp(kdl, anchor).rotation.col(2) - kdl_tcp(kdl, named).rotation.col(2)).norm(), 1e-6);
     EXPECT_TRUE(planners::ik_branch(model, anchor) == planners::ik_branch(model, named));
     // Same TCP, same branch; the redundancy (null-space term) may differ: reported, not asserted.
-    RecordProperty(c.scene + "_" + c.pose + "_joint_distance", std::to_string((anchor - named).norm()));
+    std::cout << c.scene << " " << c.pose << ": anchor vs named pose, joint distance " << (anchor - named).norm()
+              << " rad, clearance " << plain.check(anchor).clearance << " vs " << plain.check(named).clearance << " m\n";
   }
 }
 
@@ -257,6 +258,19 @@ TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
     EXPECT_LE(worst_angle, 1e-3);
     std::cout << "  worst distance from the task geometry " << worst_position << " m, worst axis angle " << worst_angle
               << " rad, min clearance " << min_clearance << " m, peak TCP speed " << peak_speed << " m/s\n";
+
+    // The anchor of a task configuration mid-path: its TCP retracted along its own tool axis (KDL),
+    // contact-free in the scene itself.
+    {
+      const Vector7& middle = path.states[path.states.size() / 2];
+      ClearanceChecker plain(model, scene);
+      const Vector7 anchor = planners::task_anchor(task, middle, plain);
+      const Transform at_middle = kdl_tcp(kdl, middle), at_anchor = kdl_tcp(kdl, anchor);
+      EXPECT_LT((at_anchor.rotation.col(2) - at_middle.rotation.col(2)).norm(), 1e-7);
+      const Vector3 back = at_middle.translation - at_anchor.translation;   // along +z, by the retract (+ insertion)
+      EXPECT_LT(back.cross(at_middle.rotation.col(2)).norm(), 1e-7);
+      EXPECT_GE(plain.check(anchor).clearance, 0.0);
+    }
 
     // Timed along the task: the scan at its speed; the drill ends advanced by `advance` past its standoff.
     const Transform end = kdl_tcp(kdl, log.q.back());

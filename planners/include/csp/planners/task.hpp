@@ -66,6 +66,8 @@ class TaskConstraint {
   // axis. ultrasound and rcm: the task's `hover`; burr: the patient clearance + 0.01 m (as the
   // scene's burr_hover: the bit clears the skull by its class clearance, strictly).
   TcpTarget anchor_target(double progress) const;
+  // The same for any configuration on the manifold, along its own tool axis.
+  TcpTarget anchor_target(const Vector7& q);
   double anchor_retract() const { return anchor_retract_; }
 
   // True when the state respects the task's inequalities (rcm: insertion within its range, pivot
@@ -140,10 +142,10 @@ struct TaskStates {
 };
 TaskStates task_states(TaskConstraint& task, ClearanceChecker& contact_checker, ClearanceChecker& scene_checker);
 
-// The anchor at a progress value (anchor_target) by IK seeded at a task configuration q_task near
-// it (same branch), collision-free in the scene itself (no contact exemption). Throws TaskError
-// naming the scene if unreachable, in collision or on another branch.
-Vector7 task_anchor(TaskConstraint& task, double progress, const Vector7& q_task, ClearanceChecker& scene_checker);
+// The anchor of a task configuration q_task (e.g. any of TaskPath::states): anchor_target(q_task)
+// by IK seeded at q_task (same branch), collision-free in the scene itself (no contact exemption).
+// Throws TaskError naming the scene if unreachable, in collision or on another branch.
+Vector7 task_anchor(TaskConstraint& task, const Vector7& q_task, ClearanceChecker& scene_checker);
 
 // The whole task path: states, planning on the manifold, densification, timing, 1 kHz log.
 // `model` carries the scene's tool (with_tool). Throws TaskError naming the scene and what failed.
