@@ -311,6 +311,28 @@ TEST(TaskConstraint, ScanOffTheSkinNamesTheSceneAndThePoint) {
   }
 }
 
+// The rcm anchor of the vertical shaft (pivot 0 at mid insertion, by IK from the named pose) lands on
+// the scene's port_hover: tip 0.10 above the port, shaft along -z, same branch.
+TEST(TaskStates, RcmAnchorOfTheVerticalShaftMatchesPortHover) {
+  const Scene scene = planners::load_scene(scene_file("mis_rcm"));
+  const Model model = scene_model("panda", scene);
+  TaskConstraint task(model, scene);
+  ClearanceChecker plain(model, scene);
+  const Vector7& named = scene.pose("port_hover").q;
+  planners::IkOptions options;
+  options.tolerance = 1e-9;
+  const planners::TcpTarget vertical = task.target(0.0);
+  const planners::IkResult on_task = planners::solve_ik(planners::tcp_target_rows(model, vertical.position, vertical.axis), named,
+                                                        model.parameters().joint_limits, nullptr, options);
+  ASSERT_TRUE(on_task.converged);
+  const Vector7 anchor = planners::task_anchor(task, on_task.q, plain);
+  KdlPeer kdl(model);
+  EXPECT_LT((kdl_tcp(kdl, anchor).translation - kdl_tcp(kdl, named).translation).norm(), 1e-6);
+  EXPECT_LT((kdl_tcp(kdl, anchor).rotation.col(2) - kdl_tcp(kdl, named).rotation.col(2)).norm(), 1e-6);
+  EXPECT_TRUE(planners::ik_branch(model, anchor) == planners::ik_branch(model, named));
+  std::cout << "mis_rcm port_hover: anchor vs named pose, joint distance " << (anchor - named).norm() << " rad\n";
+}
+
 // A trocar moved (with the patient) out of the arm's reach: one error naming the scene and the state.
 TEST(TaskStates, UnreachableTrocarNamesTheSceneAndTheState) {
   Scene scene = planners::load_scene(scene_file("mis_rcm"));
