@@ -100,8 +100,10 @@ class TaskConstraint {
   Matrix6x7 jacobian_ = Matrix6x7::Zero();
 };
 
-// The scene with the tool's capsules exempt from the task's contact obstacle (the probe's face on
-// the skin, the shaft through the port, the drill at the skull).
+// The scene the task's states are checked in: every patient solid keeps its clearance against the
+// arm's links; the tool's capsules see a copy of it (class "task_contact", clearance 0: touching,
+// no penetration), and the tool's tip capsule (the one ending at the TCP) is exempt from the
+// contact obstacle (the probe's face on the skin, the shaft through the port, the bit at the bone).
 Scene contact_scene(const Scene& scene, const std::string& contact_obstacle);
 
 struct TaskPathOptions {
@@ -126,7 +128,7 @@ struct TaskPath {
   Vector7 start = Vector7::Zero(), end = Vector7::Zero();   // task start and end (IK)
   std::vector<Vector7> anchors;       // hover configurations: start and end retracted (one if they coincide)
   std::vector<Vector7> waypoints;     // the planner's path on the manifold
-  std::vector<Vector7> states;        // densified (<= delta per joint) and projected: the task's configurations
+  std::vector<Vector7> states;        // densified (<= delta/2 per joint) and projected: the task's configurations
   std::vector<double> progress;       // task coordinate per state
   JointLog log;                       // timed, rest to rest, sampled at rate_hz
   double duration = 0.0;              // [s]
