@@ -36,6 +36,24 @@ Model scene_model(const std::string& robot, const Scene& scene) {
 
 // ---------------- Constraint Jacobians vs central differences ----------------
 
+// The analytic Jacobian of `rows` at q against central differences (h = 1e-6).
+void expect_jacobian_matches_central_differences(const planners::ConstraintRows& rows, const Vector7& q) {
+  Eigen::VectorXd f, plus_f, minus_f;
+  Eigen::MatrixXd J, unused;
+  rows(q, f, J);
+  ASSERT_EQ(J.rows(), f.size());
+  constexpr double h = 1e-6;
+  for (int j = 0; j < kNumJoints; ++j) {
+    Vector7 plus = q, minus = q;
+    plus[j] += h;
+    minus[j] -= h;
+    rows(plus, plus_f, unused);
+    rows(minus, minus_f, unused);
+    const Eigen::VectorXd fd = (plus_f - minus_f) / (2.0 * h);
+    for (int r = 0; r < f.size(); ++r) EXPECT_NEAR(J(r, j), fd[r], 1e-7 * (1.0 + std::abs(fd[r]))) << "row " << r << " joint " << j;
+  }
+}
+
 TEST(TaskConstraint, AnalyticJacobianMatchesCentralDifferences) {
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 0.3);
@@ -49,18 +67,7 @@ TEST(TaskConstraint, AnalyticJacobianMatchesCentralDifferences) {
       // Around the scene's poses (near the task, where the skin normal's cylinder part applies) and far from it.
       Vector7 q = scene.poses[trial % scene.poses.size()].q;
       for (int j = 0; j < kNumJoints; ++j) q[j] += noise(rng);
-      Eigen::VectorXd f;
-      Eigen::MatrixXd J;
-      task.evaluate(q, f, J);
-      ASSERT_EQ(J.rows(), task.codim());
-      constexpr double h = 1e-6;
-      for (int j = 0; j < kNumJoints; ++j) {
-        Vector7 plus = q, minus = q;
-        plus[j] += h;
-        minus[j] -= h;
-        const Eigen::VectorXd fd = (task.function(plus) - task.function(minus)) / (2.0 * h);
-        for (int r = 0; r < task.codim(); ++r) EXPECT_NEAR(J(r, j), fd[r], 1e-7 * (1.0 + std::abs(fd[r]))) << "row " << r << " joint " << j;
-      }
+      expect_jacobian_matches_central_differences(task.rows(), q);
     }
   }
 }
@@ -74,18 +81,7 @@ TEST(Ik, TcpTargetRowsJacobianMatchesCentralDifferences) {
   for (int trial = 0; trial < 20; ++trial) {
     Vector7 q;
     for (int j = 0; j < kNumJoints; ++j) q[j] = u(rng);
-    Eigen::VectorXd f, fp, fm;
-    Eigen::MatrixXd J, unused;
-    rows(q, f, J);
-    for (int j = 0; j < kNumJoints; ++j) {
-      Vector7 plus = q, minus = q;
-      plus[j] += 1e-6;
-      minus[j] -= 1e-6;
-      rows(plus, fp, unused);
-      rows(minus, fm, unused);
-      const Eigen::VectorXd fd = (fp - fm) / 2e-6;
-      for (int r = 0; r < 5; ++r) EXPECT_NEAR(J(r, j), fd[r], 1e-7 * (1.0 + std::abs(fd[r])));
-    }
+    expect_jacobian_matches_central_differences(rows, q);
   }
 }
 
@@ -180,107 +176,107 @@ const std::vector<std::string> kPathScenes = kScenes;
 
 TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
   for (const std::string robot : {"panda", "fr3"})
-  for (const auto& name : kPathScenes) {
-    SCOPED_TRACE(robot + " " + name);
-    const Scene scene = planners::load_scene(scene_file(name));
-    const Model model = scene_model(robot, scene);
-    const planners::TaskPathOptions options;
-    const planners::TaskPath path = planners::plan_task_path(scene, model, options);
-    const JointLog& log = path.log;
-    ASSERT_GT(log.t.size(), 1000u);
-    std::cout << robot << " " << name << ": " << path.waypoints.size() << " waypoints, " << path.states.size() << " states, "
-              << path.iterations << " iterations, " << path.planning_seconds << " s planning, duration " << path.duration
-              << " s\n";
+    for (const auto& name : kPathScenes) {
+      SCOPED_TRACE(robot + " " + name);
+      const Scene scene = planners::load_scene(scene_file(name));
+      const Model model = scene_model(robot, scene);
+      const planners::TaskPathOptions options;
+      const planners::TaskPath path = planners::plan_task_path(scene, model, options);
+      const JointLog& log = path.log;
+      ASSERT_GT(log.t.size(), 1000u);
+      std::cout << robot << " " << name << ": " << path.waypoints.size() << " waypoints, " << path.states.size() << " states, "
+                << path.iterations << " iterations, " << path.planning_seconds << " s planning, duration " << path.duration
+                << " s\n";
 
-    // Dense states: joint steps <= delta.
-    for (std::size_t i = 1; i < path.states.size(); ++i)
-      EXPECT_LE((path.states[i] - path.states[i - 1]).cwiseAbs().maxCoeff(), options.delta + 1e-12);
+      // Dense states: joint steps <= delta.
+      for (std::size_t i = 1; i < path.states.size(); ++i)
+        EXPECT_LE((path.states[i] - path.states[i - 1]).cwiseAbs().maxCoeff(), options.delta + 1e-12);
 
-    // Rest to rest; limits with the fractions asked (jerk by finite differences at 1 kHz, as the robot sees it).
-    const JointLimits& limits = model.parameters().joint_limits;
-    EXPECT_LT(log.dq.front().norm(), 1e-9);
-    EXPECT_LT(log.dq.back().norm(), 1e-9);
-    EXPECT_LT(log.ddq.front().norm(), 1e-9);
-    EXPECT_LT(log.ddq.back().norm(), 1e-6);
-    double worst_v = 0.0, worst_a = 0.0, worst_j = 0.0;
-    for (std::size_t k = 0; k < log.t.size(); ++k) {
-      EXPECT_NEAR(log.t[k], 1e-3 * static_cast<double>(k), 1e-12);
-      worst_v = std::max(worst_v, (log.dq[k].cwiseAbs().array() / limits.dq_max.array()).maxCoeff());
-      worst_a = std::max(worst_a, (log.ddq[k].cwiseAbs().array() / limits.ddq_max.array()).maxCoeff());
-      if (k > 0) worst_j = std::max(worst_j, ((log.ddq[k] - log.ddq[k - 1]).cwiseAbs().array() / 1e-3 / limits.dddq_max.array()).maxCoeff());
-      EXPECT_TRUE((log.q[k].array() >= limits.q_min.array()).all() && (log.q[k].array() <= limits.q_max.array()).all());
-      // FR3: the position-based velocity bounds too
-      EXPECT_TRUE((log.dq[k].array() <= limits.dq_upper(log.q[k]).array()).all() &&
-                  (log.dq[k].array() >= limits.dq_lower(log.q[k]).array()).all());
-    }
-    EXPECT_LE(worst_v, options.velocity_fraction + 1e-9);
-    EXPECT_LE(worst_a, options.acceleration_fraction + 1e-9);
-    EXPECT_LE(worst_j, options.jerk_fraction + 1e-3);
-    std::cout << "  peak fractions of the limits: velocity " << worst_v << ", acceleration " << worst_a << ", jerk " << worst_j << "\n";
+      // Rest to rest; limits with the fractions asked (jerk by finite differences at 1 kHz, as the robot sees it).
+      const JointLimits& limits = model.parameters().joint_limits;
+      EXPECT_LT(log.dq.front().norm(), 1e-9);
+      EXPECT_LT(log.dq.back().norm(), 1e-9);
+      EXPECT_LT(log.ddq.front().norm(), 1e-9);
+      EXPECT_LT(log.ddq.back().norm(), 1e-6);
+      double worst_v = 0.0, worst_a = 0.0, worst_j = 0.0;
+      for (std::size_t k = 0; k < log.t.size(); ++k) {
+        EXPECT_NEAR(log.t[k], 1e-3 * static_cast<double>(k), 1e-12);
+        worst_v = std::max(worst_v, (log.dq[k].cwiseAbs().array() / limits.dq_max.array()).maxCoeff());
+        worst_a = std::max(worst_a, (log.ddq[k].cwiseAbs().array() / limits.ddq_max.array()).maxCoeff());
+        if (k > 0) worst_j = std::max(worst_j, ((log.ddq[k] - log.ddq[k - 1]).cwiseAbs().array() / 1e-3 / limits.dddq_max.array()).maxCoeff());
+        EXPECT_TRUE((log.q[k].array() >= limits.q_min.array()).all() && (log.q[k].array() <= limits.q_max.array()).all());
+        // FR3: the position-based velocity bounds too
+        EXPECT_TRUE((log.dq[k].array() <= limits.dq_upper(log.q[k]).array()).all() &&
+                    (log.dq[k].array() >= limits.dq_lower(log.q[k]).array()).all());
+      }
+      EXPECT_LE(worst_v, options.velocity_fraction + 1e-9);
+      EXPECT_LE(worst_a, options.acceleration_fraction + 1e-9);
+      EXPECT_LE(worst_j, options.jerk_fraction + 1e-3);
+      std::cout << "  peak fractions of the limits: velocity " << worst_v << ", acceleration " << worst_a << ", jerk " << worst_j << "\n";
 
-    // Every sample valid when re-checked by a checker of its own (the task's contact scene).
-    TaskConstraint task(model, scene);
-    ClearanceChecker checker(model, planners::contact_scene(scene, task.contact_obstacle()));
-    double min_clearance = 1e9;
-    for (const Vector7& q : log.q) min_clearance = std::min(min_clearance, checker.check(q).clearance);
-    EXPECT_GE(min_clearance, 0.0);
+      // Every sample valid when re-checked by a checker of its own (the task's contact scene).
+      TaskConstraint task(model, scene);
+      ClearanceChecker checker(model, planners::contact_scene(scene, task.contact_obstacle()));
+      double min_clearance = 1e9;
+      for (const Vector7& q : log.q) min_clearance = std::min(min_clearance, checker.check(q).clearance);
+      EXPECT_GE(min_clearance, 0.0);
 
-    // The task geometry at every sample, from KDL's forward kinematics and the scene's numbers.
-    KdlPeer kdl(model);
-    double worst_position = 0.0, worst_angle = 0.0, peak_speed = 0.0;
-    Vector3 previous = kdl_tcp(kdl, log.q.front()).translation;
-    for (const Vector7& q : log.q) {
-      const Transform T = kdl_tcp(kdl, q);
-      const Vector3 p = T.translation, z = T.rotation.col(2);
-      peak_speed = std::max(peak_speed, (p - previous).norm() / 1e-3);
-      previous = p;
+      // The task geometry at every sample, from KDL's forward kinematics and the scene's numbers.
+      KdlPeer kdl(model);
+      double worst_position = 0.0, worst_angle = 0.0, peak_speed = 0.0;
+      Vector3 previous = kdl_tcp(kdl, log.q.front()).translation;
+      for (const Vector7& q : log.q) {
+        const Transform T = kdl_tcp(kdl, q);
+        const Vector3 p = T.translation, z = T.rotation.col(2);
+        peak_speed = std::max(peak_speed, (p - previous).norm() / 1e-3);
+        previous = p;
+        if (const auto* scan = std::get_if<planners::UltrasoundScan>(&scene.task)) {
+          const auto& skin = std::get<Capsule>(std::find_if(scene.obstacles.begin(), scene.obstacles.end(), [&](const auto& o) {
+                                                 return o.name == task.contact_obstacle();
+                                               })->shape);
+          const SkinPoint sp = skin_at(skin, p);
+          const Vector3 line = (scan->end - scan->start).normalized();
+          const Vector3 off_line = (p - scan->start) - (p - scan->start).dot(line) * line;
+          worst_position = std::max({worst_position, std::abs(sp.distance), off_line.norm()});
+          worst_angle = std::max(worst_angle, angle(z, sp.inward));
+        } else if (const auto* rcm = std::get_if<planners::RcmPivot>(&scene.task)) {
+          worst_position = std::max(worst_position, (rcm->trocar - p).cross(z).norm());
+          const double insertion = z.dot(p - rcm->trocar);
+          EXPECT_TRUE(insertion >= rcm->insertion_min - 1e-9 && insertion <= rcm->insertion_max + 1e-9) << insertion;
+          EXPECT_LE(angle(z, -Vector3::UnitZ()), rcm->max_pivot + 1e-9);
+        } else {
+          const auto& burr = std::get<planners::BurrHole>(scene.task);
+          worst_position = std::max(worst_position, (p - burr.entry).cross(burr.axis).norm());
+          worst_angle = std::max(worst_angle, angle(z, -burr.axis));
+        }
+      }
+      EXPECT_LE(worst_position, 1e-4);   // issue 13: within 0.1 mm
+      EXPECT_LE(worst_angle, 1e-3);
+      std::cout << "  worst distance from the task geometry " << worst_position << " m, worst axis angle " << worst_angle
+                << " rad, min clearance " << min_clearance << " m, peak TCP speed " << peak_speed << " m/s\n";
+
+      // The anchor of a task configuration mid-path: its TCP retracted along its own tool axis (KDL),
+      // contact-free in the scene itself.
+      {
+        const Vector7& middle = path.states[path.states.size() / 2];
+        ClearanceChecker plain(model, scene);
+        const Vector7 anchor = planners::task_anchor(task, middle, plain);
+        const Transform at_middle = kdl_tcp(kdl, middle), at_anchor = kdl_tcp(kdl, anchor);
+        EXPECT_LT((at_anchor.rotation.col(2) - at_middle.rotation.col(2)).norm(), 1e-7);
+        const Vector3 back = at_middle.translation - at_anchor.translation;   // along +z, by the retract (+ insertion)
+        EXPECT_LT(back.cross(at_middle.rotation.col(2)).norm(), 1e-7);
+        EXPECT_GE(plain.check(anchor).clearance, 0.0);
+      }
+
+      // Timed along the task: the scan at its speed; the drill ends advanced by `advance` past its standoff.
+      const Transform end = kdl_tcp(kdl, log.q.back());
       if (const auto* scan = std::get_if<planners::UltrasoundScan>(&scene.task)) {
-        const auto& skin = std::get<Capsule>(std::find_if(scene.obstacles.begin(), scene.obstacles.end(), [&](const auto& o) {
-                                               return o.name == task.contact_obstacle();
-                                             })->shape);
-        const SkinPoint sp = skin_at(skin, p);
-        const Vector3 line = (scan->end - scan->start).normalized();
-        const Vector3 off_line = (p - scan->start) - (p - scan->start).dot(line) * line;
-        worst_position = std::max({worst_position, std::abs(sp.distance), off_line.norm()});
-        worst_angle = std::max(worst_angle, angle(z, sp.inward));
-      } else if (const auto* rcm = std::get_if<planners::RcmPivot>(&scene.task)) {
-        worst_position = std::max(worst_position, (rcm->trocar - p).cross(z).norm());
-        const double insertion = z.dot(p - rcm->trocar);
-        EXPECT_TRUE(insertion >= rcm->insertion_min - 1e-9 && insertion <= rcm->insertion_max + 1e-9) << insertion;
-        EXPECT_LE(angle(z, -Vector3::UnitZ()), rcm->max_pivot + 1e-9);
-      } else {
-        const auto& burr = std::get<planners::BurrHole>(scene.task);
-        worst_position = std::max(worst_position, (p - burr.entry).cross(burr.axis).norm());
-        worst_angle = std::max(worst_angle, angle(z, -burr.axis));
+        EXPECT_NEAR(peak_speed, scan->speed, 1e-3 * scan->speed);
+        EXPECT_LT((end.translation - scan->end).norm(), 1e-4);
+      } else if (const auto* burr = std::get_if<planners::BurrHole>(&scene.task)) {
+        EXPECT_NEAR(burr->axis.dot(end.translation - burr->entry), burr->standoff - burr->advance, 1e-6);
       }
     }
-    EXPECT_LE(worst_position, 1e-4);   // issue 13: within 0.1 mm
-    EXPECT_LE(worst_angle, 1e-3);
-    std::cout << "  worst distance from the task geometry " << worst_position << " m, worst axis angle " << worst_angle
-              << " rad, min clearance " << min_clearance << " m, peak TCP speed " << peak_speed << " m/s\n";
-
-    // The anchor of a task configuration mid-path: its TCP retracted along its own tool axis (KDL),
-    // contact-free in the scene itself.
-    {
-      const Vector7& middle = path.states[path.states.size() / 2];
-      ClearanceChecker plain(model, scene);
-      const Vector7 anchor = planners::task_anchor(task, middle, plain);
-      const Transform at_middle = kdl_tcp(kdl, middle), at_anchor = kdl_tcp(kdl, anchor);
-      EXPECT_LT((at_anchor.rotation.col(2) - at_middle.rotation.col(2)).norm(), 1e-7);
-      const Vector3 back = at_middle.translation - at_anchor.translation;   // along +z, by the retract (+ insertion)
-      EXPECT_LT(back.cross(at_middle.rotation.col(2)).norm(), 1e-7);
-      EXPECT_GE(plain.check(anchor).clearance, 0.0);
-    }
-
-    // Timed along the task: the scan at its speed; the drill ends advanced by `advance` past its standoff.
-    const Transform end = kdl_tcp(kdl, log.q.back());
-    if (const auto* scan = std::get_if<planners::UltrasoundScan>(&scene.task)) {
-      EXPECT_NEAR(peak_speed, scan->speed, 1e-3 * scan->speed);
-      EXPECT_LT((end.translation - scan->end).norm(), 1e-4);
-    } else if (const auto* burr = std::get_if<planners::BurrHole>(&scene.task)) {
-      EXPECT_NEAR(burr->axis.dot(end.translation - burr->entry), burr->standoff - burr->advance, 1e-6);
-    }
-  }
 }
 
 // The same seed gives the same path, sample for sample (iteration caps, no clock).
