@@ -247,16 +247,24 @@ std::vector<double> ExcitationProblem::margins(const std::vector<double>& x, std
   Matrix6x7 J, J_h;
   for (int k = 0; k < design_q_.rows(); ++k) {
     const JointSample s = design_state(free, k);
-    // Torque (RNEA with the tool + the model's friction) and its state derivatives.
-    const auto torque = [&](const JointSample& state) {
+    // Torque (RNEA with the tool + the model's friction) and its state derivatives. Friction acts per
+    // joint; a linear law jumps at dq = 0 (sign), so its slope is taken from two points on the side of
+    // the motion (viscous part only there; the sigmoid of Gaz et al. is smooth anyway).
+    const FrictionModel& friction = model_.parameters().friction;
+    const auto rigid = [&](const JointSample& state) {
       Vector7 tau;
       rnea(model_, data, state.q, state.dq, state.ddq, tau);
-      return Vector7(tau + friction_torque(model_.parameters().friction, state.dq));
+      return tau;
     };
-    const Vector7 tau = torque(s);
+    const Vector7 tau_rigid = rigid(s);
+    const Vector7 tau = tau_rigid + friction_torque(friction, s.dq);
     Eigen::Matrix<double, kNumJoints, kState> dtau;
-    if (grad)
-      for (int i = 0; i < kState; ++i) dtau.col(i) = (torque(perturbed(s, i, kStep)) - tau) / kStep;
+    if (grad) {
+      for (int i = 0; i < kState; ++i) dtau.col(i) = (rigid(perturbed(s, i, kStep)) - tau_rigid) / kStep;
+      const Vector7 side = s.dq.unaryExpr([](double v) { return v < 0.0 ? -kStep : kStep; });
+      const Vector7 slope = (friction_torque(friction, s.dq + 2.0 * side) - friction_torque(friction, s.dq + side)).cwiseQuotient(side);
+      dtau.middleCols<kNumJoints>(kNumJoints).diagonal() += slope;
+    }
     // FR3: the velocity bounds move with q.
     const Vector7 up = f.dq * lim.dq_upper(s.q), down = f.dq * lim.dq_lower(s.q);
     Vector7 dup = Vector7::Zero(), ddown = Vector7::Zero();
@@ -454,10 +462,11 @@ ExcitationResult ExcitationProblem::solve() const {
   }
   ExcitationResult result{series(best), 1.0, 0.0, {}, {}, best_value, 0, ""};
 
-  // SLSQP: sequential quadratic programming with a BFGS Hessian; the constraints are smooth and few
-  // (38), the variables 49, and its line search keeps evaluations low. The best point whose design
-  // margins all hold is kept (SLSQP may end on a slightly infeasible iterate).
-  nlopt::opt opt(nlopt::LD_SLSQP, static_cast<unsigned>(variables()));
+  // MMA (Svanberg 2002, NLopt's conservative CCSA variant): each outer iterate is feasible when the
+  // start is, so any evaluation budget ends on a plan within the design margins. SLSQP was tried
+  // first: its quasi-Newton steps left the feasible set far (margins -3) and spent the budget coming
+  // back. The best point whose design margins all hold is kept.
+  nlopt::opt opt(nlopt::LD_MMA, static_cast<unsigned>(variables()));
   struct Context {
     const ExcitationProblem* problem;
     std::vector<double> last_x;

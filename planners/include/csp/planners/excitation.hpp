@@ -8,7 +8,7 @@
 //              kind by a smooth minimum (log-sum-exp) of normalised margins (<= the sampled minimum).
 //
 // 20 deterministic random starts (amplitude-scaled into the limits), the best one refined by NLopt's
-// SLSQP; the result is then checked at 1 kHz and, if anything is over, slowed down in closed form.
+// MMA (gradient-based, conservative: every outer iterate within the margins); the result is then checked at 1 kHz and, if anything is over, slowed down in closed form.
 #pragma once
 
 #include <functional>
