@@ -367,7 +367,7 @@ std::vector<double> ExcitationProblem::margins(const std::vector<double>& x, std
         for (int i = 0; i < kNumJoints; ++i) dc[i] = (options_.clearance(s.q + kStep * Vector7::Unit(i)) - c) / kStep;
         gc = chain(dc, k) / kClearanceScale;
       }
-      groups.back().add(c / kClearanceScale, gc);
+      groups.back().add((c - options_.clearance_buffer) / kClearanceScale, gc);
     }
   }
   std::vector<double> out;
@@ -494,7 +494,7 @@ ExcitationResult ExcitationProblem::solve() const {
     const double value = criterion(x, nullptr);
     if (value < best_value) best_value = value, best = std::move(x);
   }
-  ExcitationResult result{series(best), 1.0, 0.0, {}, {}, best_value, 0, ""};
+  ExcitationResult result{series(best), 1.0, 1.0, 0.0, {}, {}, best_value, 0, ""};
 
   // MMA (Svanberg 2002, NLopt's conservative CCSA variant): each outer iterate is feasible when the
   // start is, so any evaluation budget ends on a plan within the design margins. SLSQP was tried
@@ -549,9 +549,26 @@ ExcitationResult ExcitationProblem::solve() const {
   }
   result.evaluations = context.evaluations;
 
-  // Check at 1 kHz; slow down in closed form if the design samples missed a peak.
+  // Check at 1 kHz. A contact between design samples: shrink toward the anchor (clearance > 0 there)
+  // by bisection. A rate limit over: slow down in closed form.
+  const auto shrunk = [&](double s) {
+    std::vector<double> x = context.best_x;
+    for (double& v : x) v *= s;
+    return this->series(x);
+  };
   FourierSeries series = this->series(context.best_x);
   result.usage = usage(series, series.period());
+  if (result.usage.min_clearance < 0.0) {
+    double good = 0.0, bad = 1.0;
+    for (int i = 0; i < 12; ++i) {
+      const double mid = 0.5 * (good + bad);
+      const FourierSeries candidate = shrunk(mid);
+      (usage(candidate, candidate.period()).min_clearance >= 0.0 ? good : bad) = mid;
+    }
+    result.amplitude_scale = good;
+    series = shrunk(good);
+    result.usage = usage(series, series.period());
+  }
   if (!result.usage.within()) {
     result.time_scale = std::max(1.0, time_scale_into_limits(*this, series));
     series = time_scaled(series, result.time_scale);
