@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -108,19 +109,13 @@ const ExcitationResult& solved(bool task) {
   return task ? t : d;
 }
 
-std::vector<double> read_numbers(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open " + path);
-  std::vector<double> values;
-  for (double v; in >> v;) values.push_back(v);
-  return values;
-}
-
 // Gaz et al.'s trajectory 1 (../shared/data/real/gaz2019_trajectory_1; its regeneration is checked in
 // test_planners.cpp): 5 harmonics at w_f = 0.15 pi, from gen_q0.
 FourierSeries gaz_trajectory_one() {
   const std::string dir = std::string(CSP_SHARED_DATA_DIR) + "/real/gaz2019_trajectory_1/";
-  const std::vector<double> params = read_numbers(dir + "gen_params.txt"), q0 = read_numbers(dir + "gen_q0.txt");
+  std::ifstream params_file(dir + "gen_params.txt"), q0_file(dir + "gen_q0.txt");
+  const std::vector<double> params{std::istream_iterator<double>(params_file), {}}, q0{std::istream_iterator<double>(q0_file), {}};
+  if (params.size() != 70 || q0.size() != 7) throw std::runtime_error("cannot read Gaz et al.'s trajectory 1 under " + dir);
   planners::Coefficients a(kNumJoints, 5), b(kNumJoints, 5);
   for (int j = 0; j < kNumJoints; ++j)
     for (int l = 0; l < 5; ++l) a(j, l) = params.at(j * 5 + l), b(j, l) = params.at((j + 7) * 5 + l);
