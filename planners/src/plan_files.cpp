@@ -64,7 +64,8 @@ std::string exact_number(double value) {
 
 Versions versions(const std::string& ompl_version) { return {CSP_VERSION, ompl_version}; }
 
-std::string scenario_text(const std::string& title, const Vector7& initial_q, double duration, const Tool& tool) {
+std::string scenario_text(const std::string& title, const Vector7& initial_q, double duration, const Tool& tool,
+                          const Armature& armature) {
   const RigidBodyInertia& m = tool.inertia;
   const double inertia[6] = {m.inertia(0, 0), m.inertia(0, 1), m.inertia(0, 2),
                              m.inertia(1, 1), m.inertia(1, 2), m.inertia(2, 2)};
@@ -78,6 +79,9 @@ std::string scenario_text(const std::string& title, const Vector7& initial_q, do
   s += "plant:\n";
   s += "  load: {mass: " + exact_number(m.mass) + ", com: " + vector_text(m.com.data(), 3) +
        ", inertia: " + vector_text(inertia, 6) + "}   # " + nlohmann::json(tool.name).dump() + "\n";
+  if (!armature.values.isZero())
+    s += "  armature: {values: " + vector_text(armature.values.data(), kNumJoints) +
+         ", source: " + nlohmann::json(armature.source).dump() + "}\n";
   s += "initial_q: " + vector_text(initial_q.data(), kNumJoints) + "\n";
   s += "duration: " + exact_number(duration) + "\n";
   s += "clock: lockstep\n";
@@ -92,8 +96,8 @@ std::string scenario_text(const std::string& title, const Vector7& initial_q, do
 }
 
 void write_plan_files(const std::string& dir, const PlanRequest& request, const Versions& versions,
-                      const std::string& robot_file, const Scene& scene, const JointLog& trajectory,
-                      const nlohmann::json& made) {
+                      const std::string& robot_file, const Armature& armature, const Scene& scene,
+                      const JointLog& trajectory, const nlohmann::json& made) {
   namespace fs = std::filesystem;
   std::error_code error;
   fs::create_directories(dir, error);
@@ -110,7 +114,7 @@ void write_plan_files(const std::string& dir, const PlanRequest& request, const 
   const double duration = trajectory.t.back() - trajectory.t.front() + kScenarioHold;
   write_text_file((folder / "scenario.yaml").string(),
                   scenario_text("csp plan " + request.command + " " + scene.name, trajectory.q.front(), duration,
-                                scene.tool));
+                                scene.tool, armature));
 
   nlohmann::json options = nlohmann::json::object();
   std::string plan = "# Written by csp plan (docs/planning.md): `csp plan rebuild plan.yaml` makes the same files.\n";

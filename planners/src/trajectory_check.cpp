@@ -163,13 +163,14 @@ TrajectoryCheck check_trajectory(const JointLog& log, const Model& model, const 
                       format("%s vs %s (%s)", std::string(s.moving).c_str(), std::string(s.other).c_str(), classes[c].c_str())},
                      classes[c]);
     }
+    // Between two valid samples: certified free, or refused (a collision between them, or a gap
+    // too thin to prove free). Into or out of an invalid sample, the sample's failure says it.
+    if (k > 0 && smallest >= 0.0 && result.min_clearance.back() >= 0.0 && !checker.motion_is_free(log.q[k - 1], q)) {
+      ++result.uncertified_motions;
+      failures.add({"motion", 0, log.t[k - 1], row - 1, 0.0, 0.0, format("to t = %.6g s", t)}, "");
+    }
     result.t.push_back(t);
     result.min_clearance.push_back(smallest);
-    // Between this sample and the next: certified free, or refused (a collision or an unproven gap).
-    if (k + 1 < n && smallest >= 0.0 && !checker.motion_is_free(q, log.q[k + 1])) {
-      ++result.uncertified_motions;
-      failures.add({"motion", 0, t, row, 0.0, 0.0, format("to t = %.6g s", log.t[k + 1])}, "");
-    }
     dq_previous = dq;
     ddq_previous = ddq_difference;
     tau_previous = tau;
