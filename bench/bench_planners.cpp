@@ -9,22 +9,18 @@
 
 #include <benchmark/benchmark.h>
 
-#include "csp/io/robot_config.hpp"
 #include "csp/planners/checker.hpp"
+#include "planner_support.hpp"
 
 namespace {
 
 using namespace csp;
 
-const std::vector<std::string> kScenes = {"ultrasound_abdomen", "doppler_femoral", "mis_rcm", "craniotomy"};
+using bench::kShippedScenes;
 
 struct Fixture {
   explicit Fixture(int scene_index)
-      : scene(planners::load_scene(std::string(CSP_SOURCE_DIR) + "/configs/scenes/" + kScenes[scene_index] + ".yaml")),
-        model(planners::with_tool(
-            model_parameters(load_robot_config(std::string(CSP_SOURCE_DIR) + "/configs/robots/panda.yaml"), {}),
-            scene.tool)),
-        checker(model, scene) {
+      : scene(bench::shipped_scene(scene_index)), model(bench::panda_with_tool(scene)), checker(model, scene) {
     // 1024 states uniform in the joint limits (valid and invalid alike), seeded.
     std::mt19937_64 engine(1);
     const JointLimits& limits = model.parameters().joint_limits;
@@ -50,7 +46,7 @@ void BM_CheckState(benchmark::State& state) {
     const planners::StateClearance c = kBroadPhase ? f.checker.check(q) : f.checker.check_all_pairs(q);
     benchmark::DoNotOptimize(c.clearance);
   }
-  state.SetLabel(kScenes[state.range(0)]);
+  state.SetLabel(kShippedScenes[state.range(0)]);
   state.counters["pairs"] = f.checker.num_pairs();
   if (kBroadPhase) {   // the ratio to the naive baseline, both timed here on the same states under the same load
     auto per_state_ns = [&](bool broad) {
@@ -78,7 +74,7 @@ void BM_MotionCheck(benchmark::State& state) {
     const Vector7& q = valid[k++ % valid.size()];
     certified += f.checker.motion_is_free(q, q + Vector7::Constant(0.1)) ? 1 : 0;
   }
-  state.SetLabel(kScenes[state.range(0)]);
+  state.SetLabel(kShippedScenes[state.range(0)]);
   state.counters["certified_fraction"] = static_cast<double>(certified) / static_cast<double>(state.iterations());
 }
 BENCHMARK(BM_MotionCheck)->Arg(0)->Unit(benchmark::kMicrosecond);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
 
 #include <Eigen/SVD>
 
@@ -75,13 +76,18 @@ FourierBounds FourierSeries::bounds() const {
 }
 
 JointLog trajectory_log(const FourierSeries& series, double duration, double rate_hz, const Model& model) {
+  return sampled_joint_log([&](double t) { return series.sample(t); }, duration, rate_hz, model, "Fourier excitation");
+}
+
+JointLog sampled_joint_log(const std::function<JointSample(double)>& sample, double duration, double rate_hz,
+                           const Model& model, std::string source) {
   JointLog log;
-  log.source = "Fourier excitation";
+  log.source = std::move(source);
   Data data;
   const auto samples = static_cast<long>(std::floor(duration * rate_hz + 1e-9));
   for (long k = 0; k <= samples; ++k) {
     const double t = static_cast<double>(k) / rate_hz;   // no accumulated rounding
-    const JointSample s = series.sample(t);
+    const JointSample s = sample(t);
     Vector7 tau;
     rnea(model, data, s.q, s.dq, s.ddq, tau);
     log.t.push_back(t);

@@ -9,6 +9,7 @@
 // Periodic with period 1/f, so that averaging periods cuts noise and derivatives are exact.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include <Eigen/Core>
@@ -70,5 +71,10 @@ Eigen::MatrixXd rest_to_rest_basis(int harmonics);
 // model's friction), what the torque sensor of a robot that is this model would read. Write it
 // with write_joint_log_csv.
 JointLog trajectory_log(const FourierSeries& series, double duration, double rate_hz, const Model& model);
+
+// Any trajectory `sample(t)` sampled the same way (t = k / rate_hz, k = 0 .. floor(duration rate_hz)),
+// tau_J as above; `source` names it in the log. trajectory_log above and the transfers' (profile.hpp) use it.
+JointLog sampled_joint_log(const std::function<JointSample(double)>& sample, double duration, double rate_hz,
+                           const Model& model, std::string source);
 
 }  // namespace csp::planners

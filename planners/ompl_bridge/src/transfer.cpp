@@ -1,0 +1,72 @@
+// plan_transfer: a collision-free joint-space path between two rest poses (docs/planning-transfers.md).
+#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/geometric/PathSimplifier.h>
+#include <ompl/geometric/SimpleSetup.h>
+
+#include "ompl_common.hpp"
+
+namespace csp::planners::ompl_bridge {
+
+using namespace detail;
+
+Result plan_transfer(const Request& request, const Callbacks& callbacks) {
+  check_request(request, callbacks, /*need_motion_check=*/true);
+  const auto started = std::chrono::steady_clock::now();
+  const auto plan_lock = begin_plan(request.seed);
+
+  auto space = make_joint_space(request);
+  auto si = std::make_shared<ob::SpaceInformation>(space);
+  si->setStateValidityChecker(std::make_shared<ValidityChecker>(si.get(), callbacks));
+  si->setMotionValidator(std::make_shared<CertifiedMotionValidator>(si.get(), callbacks));
+
+  og::SimpleSetup setup(si);
+  ob::ScopedState<> start(space), goal(space);
+  from_joints(*space, request.start, start.get());
+  from_joints(*space, request.goal, goal.get());
+  setup.setStartAndGoalStates(start, goal);
+  setup.getProblemDefinition()->setOptimizationObjective(std::make_shared<ob::PathLengthOptimizationObjective>(si));
+  setup.setPlanner(make_planner(request.planner, si, request.range));
+  setup.setup();   // the ompl#601 path: the default projection's random matrix (JacobiSVD)
+
+  Result result;
+  result.planner = setup.getPlanner()->getName();
+  IterationBudget budget(request.max_iterations);
+  const ob::PlannerStatus status = setup.solve(budget.condition());
+  result.iterations = budget.used();
+  result.cap_hit = budget.exhausted();
+
+  if (status != ob::PlannerStatus::EXACT_SOLUTION) {
+    if (status == ob::PlannerStatus::APPROXIMATE_SOLUTION) {
+      result.best_attempt = waypoints(setup.getSolutionPath());
+      result.best_distance = setup.getProblemDefinition()->getSolutionDifference();
+    }
+    result.message = "no path found within " + std::to_string(request.max_iterations) + " iterations of " +
+                     result.planner + " (OMPL: " + status.asString() + ")";
+    result.seconds = seconds_since(started);
+    return result;
+  }
+
+  // Fixed step counts (simplify(maxTime) would depend on the clock). Each shortcut is checked by the
+  // certified motion validator; reduceVertices first drops redundant vertices, shortcutPath then
+  // connects random points of non-adjacent segments, reduceVertices again removes what that leaves.
+  og::PathGeometric& path = setup.getSolutionPath();
+  if (request.simplify_steps > 0) {
+    og::PathSimplifier simplifier(si);
+    const auto steps = static_cast<unsigned int>(request.simplify_steps);
+    simplifier.reduceVertices(path, steps, steps / 2);
+    simplifier.shortcutPath(path, steps, steps / 2);
+    simplifier.reduceVertices(path, steps, steps / 2);
+  }
+  std::vector<Joints> found = waypoints(path);
+  result.seconds = seconds_since(started);
+  if (!path_is_free(found, callbacks)) {
+    result.best_attempt = std::move(found);
+    result.message = "the path " + result.planner + " returned failed the final check (a vertex or segment in collision)";
+    return result;
+  }
+  result.solved = true;
+  result.waypoints = std::move(found);
+  return result;
+}
+
+}  // namespace csp::planners::ompl_bridge
