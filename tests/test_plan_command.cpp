@@ -7,7 +7,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -505,6 +507,111 @@ TEST(PlanFiles, PlanYamlRecordsTheRequestAndReadsBack) {
   EXPECT_EQ(plan["plan"]["coefficients"][0][1].as<double>(), 1e-17);
   EXPECT_EQ(plan["versions"]["ompl"].as<std::string>(), "1.5.2");
   EXPECT_EQ(read_text(dir + "/robot.yaml"), read_text(robot_file("fr3")));
+}
+
+}  // namespace
+}  // namespace csp
+
+namespace csp {
+namespace {
+
+// Every file of a plan directory, by name.
+std::map<std::string, std::string> files_of(const std::string& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    files[entry.path().filename().string()] = read_text(entry.path().string());
+  return files;
+}
+
+// The same request in two processes, and again from its plan.yaml: the same bytes in every file.
+TEST(PlanCommand, TheSamePlanTwiceAndRebuiltGivesByteIdenticalFiles) {
+  for (const std::vector<std::string> command :
+       {std::vector<std::string>{"transfer", "--scene", "ultrasound_abdomen", "--from", "ready", "--to",
+                                 "scan_end_hover", "--seed", "7", "--verify"},
+        std::vector<std::string>{"task", "--scene", "mis_rcm", "--robot", "fr3", "--seed", "3"}}) {
+    std::vector<std::map<std::string, std::string>> runs;
+    for (const char* name : {"first", "second"}) {
+      const std::string out = (temp_dir() / ("same_" + command[0] + "_" + name)).string();
+      std::vector<std::string> args = {"plan"};
+      args.insert(args.end(), command.begin(), command.end());
+      args.insert(args.end(), {"--out", out});
+      const Process run = run_csp(args);
+      ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+      runs.push_back(files_of(out));
+    }
+    const std::string rebuilt = (temp_dir() / ("same_" + command[0] + "_rebuilt")).string();
+    const Process rebuild = run_csp(
+        {"plan", "rebuild", (temp_dir() / ("same_" + command[0] + "_first") / "plan.yaml").string(), "--out", rebuilt});
+    ASSERT_EQ(rebuild.exit_code, 0) << rebuild.err;
+    runs.push_back(files_of(rebuilt));
+    EXPECT_GE(runs[0].size(), 8u);   // trajectory, robot, scenario, plan, report.json/md, figures
+    for (const auto& [name, bytes] : runs[0]) {
+      EXPECT_EQ(runs[1][name], bytes) << command[0] << ": " << name << " differs between two processes";
+      EXPECT_EQ(runs[2][name], bytes) << command[0] << ": " << name << " differs when rebuilt";
+    }
+  }
+}
+
+// The written scenario under `csp emulate` as it is, and --verify's figures recomputed here from
+// the emulator's own log: tracking against the planned rows, the measured motion's clearance by
+// the all-pairs check, the peak joint torque.
+TEST(PlanCommand, VerifyFiguresAgreeWithTheEmulatorsLogOnPandaAndFr3) {
+  for (const std::string robot : {"panda", "fr3"}) {
+    const std::string out = (temp_dir() / ("verify_" + robot)).string();
+    const Process plan = run_csp({"plan", "transfer", "--scene", "ultrasound_abdomen", "--robot", robot, "--from",
+                                  "ready", "--to", "scan_start_hover", "--verify", "--out", out});
+    ASSERT_EQ(plan.exit_code, 0) << plan.err << plan.out;
+    const nlohmann::json verify = nlohmann::json::parse(plan.out)["verify"];
+    EXPECT_TRUE(verify["reflex"].empty()) << verify.dump();
+
+    const std::string log_path = out + "/emulated.csv";
+    const Process emulate = run_csp({"emulate", out + "/scenario.yaml", "--log", log_path});
+    ASSERT_EQ(emulate.exit_code, 0) << emulate.out << emulate.err;
+    EXPECT_NE(emulate.out.find("finished without reflex"), std::string::npos);
+    const JointLog measured = read_joint_log_csv(log_path);
+    const JointLog planned = read_joint_log_csv(out + "/trajectory.csv");
+    const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+    const Model model = scene_model(robot, scene);
+    planners::ClearanceChecker naive(model, scene);
+    Vector7 worst = Vector7::Zero(), peak_tau = Vector7::Zero();
+    double clearance = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 1; k < measured.size(); ++k) {   // row 0: the state before the motion
+      const std::size_t row = std::min(planned.size() - 1, static_cast<std::size_t>(std::lround(measured.t[k] * 1000)));
+      worst = worst.cwiseMax((measured.q[k] - planned.q[row]).cwiseAbs());
+      peak_tau = peak_tau.cwiseMax(measured.tau_J[k].cwiseAbs().cwiseQuotient(model.parameters().joint_limits.tau_max));
+      clearance = std::min(clearance, naive.check_all_pairs(measured.q[k]).clearance);
+    }
+    double reported = std::numeric_limits<double>::infinity();
+    for (const auto& c : verify["measured_clearance"])
+      if (!c["clearance"].is_null()) reported = std::min(reported, c["clearance"].get<double>());
+    EXPECT_NEAR(reported, clearance, 1e-9) << robot;
+    for (int j = 0; j < kNumJoints; ++j) {
+      EXPECT_NEAR(verify["tracking_max"][j].get<double>(), worst[j], 1e-9) << robot << " joint " << j + 1;
+      EXPECT_NEAR(verify["peak_tau_J_fraction"][j].get<double>(), peak_tau[j], 1e-9) << robot << " joint " << j + 1;
+    }
+    EXPECT_GE(reported, 0.0);
+  }
+}
+
+TEST(PlanCommand, BadRequestsExitTwoAndNoPlanInTheBudgetExitsOne) {
+  const std::string out = (temp_dir() / "bad_plan").string();
+  const Process pose = run_csp({"plan", "transfer", "--scene", "ultrasound_abdomen", "--from", "ready", "--to",
+                                "nowhere", "--out", out});
+  EXPECT_EQ(pose.exit_code, 2);
+  EXPECT_NE(pose.err.find("no pose named `nowhere`"), std::string::npos) << pose.err;
+  const Process scene = run_csp({"plan", "task", "--scene", "no_such_scene.yaml", "--out", out});
+  EXPECT_EQ(scene.exit_code, 2);
+  EXPECT_NE(scene.err.find("--scene"), std::string::npos) << scene.err;
+  const Process criterion = run_csp({"plan", "excite", "--scene", "mis_rcm", "--criterion", "cond", "--out", out});
+  EXPECT_EQ(criterion.exit_code, 2);
+  EXPECT_NE(criterion.err.find("--criterion"), std::string::npos) << criterion.err;
+  const Process budget = run_csp({"plan", "transfer", "--scene", "craniotomy", "--from", "ready", "--to", "burr_hover",
+                                  "--planner", "rrtstar", "--max-iterations", "2", "--out", out});
+  EXPECT_EQ(budget.exit_code, 1) << budget.err;
+  EXPECT_NE(budget.err.find("no plan"), std::string::npos) << budget.err;
+  const nlohmann::json report = nlohmann::json::parse(read_text(out + "/report.json"));
+  EXPECT_FALSE(report["passed"]);
+  EXPECT_FALSE(report["plan"]["best_attempt"].empty());
 }
 
 }  // namespace
