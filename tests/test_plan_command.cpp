@@ -3,8 +3,6 @@
 // Gaz et al.'s commanded velocities), planted violations each found alone at the right time and
 // joint, broken files refused with their line and column, trajectory files played by the emulator's
 // scenarios, and the files of a plan run by `csp emulate` as they are.
-#include <sys/wait.h>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -313,11 +311,6 @@ TEST(PlanCheck, GazTrajectoryOneWithinThePandasLimitsAndFiguresRecomputed) {
 
 // ---------------- The command line ----------------
 
-struct Process {
-  int exit_code = -1;
-  std::string out, err;
-};
-
 std::string read_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream text;
@@ -325,22 +318,7 @@ std::string read_text(const std::string& path) {
   return text.str();
 }
 
-Process run_csp(const std::vector<std::string>& args) {
-  static int count = 0;
-  const std::string err_path = (temp_dir() / ("plan_stderr_" + std::to_string(count++) + ".txt")).string();
-  std::string command = std::string("'") + CSP_EXECUTABLE + "'";
-  for (const auto& arg : args) command += " '" + arg + "'";
-  command += " 2>'" + err_path + "'";
-  Process run;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (!pipe) throw std::runtime_error("popen failed: " + command);
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) run.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  run.err = read_text(err_path);
-  return run;
-}
+ProgramRun run_csp(const std::vector<std::string>& args) { return run_program(CSP_EXECUTABLE, args); }
 
 TEST(PlanCommand, BrokenTrajectoryFilesAreRefusedWithLineAndColumn) {
   const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
@@ -348,7 +326,7 @@ TEST(PlanCommand, BrokenTrajectoryFilesAreRefusedWithLineAndColumn) {
   const std::string jump = (temp_dir() / "jump.csv").string();
   log.q[500][3] += 0.1;   // line 502: a step of 0.1 rad in 1 ms (the limit allows 2.175 mrad)
   write_joint_log_csv(jump, log);
-  const Process jumped = run_csp({"plan", "check", jump, "--scene", "ultrasound_abdomen"});
+  const ProgramRun jumped = run_csp({"plan", "check", jump, "--scene", "ultrasound_abdomen"});
   EXPECT_EQ(jumped.exit_code, 2) << jumped.err;
   EXPECT_NE(jumped.err.find(jump + ": line 502 (t = 0.5 s), column q4: a jump"), std::string::npos) << jumped.err;
 
@@ -364,12 +342,12 @@ TEST(PlanCommand, BrokenTrajectoryFilesAreRefusedWithLineAndColumn) {
   const std::size_t field = text.find(',', line_start) + 1;   // column 2: q1 of line 302
   text.replace(field, text.find(',', field) - field, "nan");
   std::ofstream(nan, std::ios::binary) << text;
-  const Process with_nan = run_csp({"plan", "check", nan, "--scene", "ultrasound_abdomen"});
+  const ProgramRun with_nan = run_csp({"plan", "check", nan, "--scene", "ultrasound_abdomen"});
   EXPECT_EQ(with_nan.exit_code, 2);
   EXPECT_NE(with_nan.err.find(nan + ":302: column 2 (q1): expected a finite number, got `nan`"), std::string::npos)
       << with_nan.err;
 
-  const Process no_scene = run_csp({"plan", "check", nan, "--scene", "no_such_scene"});
+  const ProgramRun no_scene = run_csp({"plan", "check", nan, "--scene", "no_such_scene"});
   EXPECT_EQ(no_scene.exit_code, 2);
   EXPECT_NE(no_scene.err.find("--scene"), std::string::npos) << no_scene.err;
 }
@@ -379,7 +357,7 @@ TEST(PlanCommand, CheckReportsAFailingTrajectoryWithExitOneAndWritesTheReport) {
   const std::string file = (temp_dir() / "too_fast.csv").string();
   write_joint_log_csv(file, joint_move(scene.pose("ready").q, 6, -1.9, 0.5, 1.5, 2.5));
   const std::string out = (temp_dir() / "check_report").string();
-  const Process run = run_csp({"plan", "check", file, "--scene", "ultrasound_abdomen", "--out", out});
+  const ProgramRun run = run_csp({"plan", "check", file, "--scene", "ultrasound_abdomen", "--out", out});
   EXPECT_EQ(run.exit_code, 1) << run.err;
   const nlohmann::json report = nlohmann::json::parse(run.out);
   EXPECT_FALSE(report["passed"]);
@@ -481,7 +459,7 @@ TEST(PlanFiles, TheWrittenScenarioRunsUnderCspEmulateOnPandaAndFr3) {
     planners::write_plan_files(dir, {"excite", "ultrasound_abdomen", robot, 1, {}}, planners::versions("none"),
                                robot_file(robot), armature_of(robot), scene, small_excitation(model, scene.pose("ready").q, 3.0),
                                nlohmann::json::object());
-    const Process run = run_csp({"emulate", dir + "/scenario.yaml"});
+    const ProgramRun run = run_csp({"emulate", dir + "/scenario.yaml"});
     EXPECT_EQ(run.exit_code, 0) << robot << "\n" << run.out << run.err;
     EXPECT_NE(run.out.find("finished without reflex"), std::string::npos) << run.out;
   }
@@ -535,12 +513,12 @@ TEST(PlanCommand, TheSamePlanTwiceAndRebuiltGivesByteIdenticalFiles) {
       std::vector<std::string> args = {"plan"};
       args.insert(args.end(), command.begin(), command.end());
       args.insert(args.end(), {"--out", out});
-      const Process run = run_csp(args);
+      const ProgramRun run = run_csp(args);
       ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
       runs.push_back(files_of(out));
     }
     const std::string rebuilt = (temp_dir() / ("same_" + command[0] + "_rebuilt")).string();
-    const Process rebuild = run_csp(
+    const ProgramRun rebuild = run_csp(
         {"plan", "rebuild", (temp_dir() / ("same_" + command[0] + "_first") / "plan.yaml").string(), "--out", rebuilt});
     ASSERT_EQ(rebuild.exit_code, 0) << rebuild.err;
     runs.push_back(files_of(rebuilt));
@@ -558,14 +536,14 @@ TEST(PlanCommand, TheSamePlanTwiceAndRebuiltGivesByteIdenticalFiles) {
 TEST(PlanCommand, VerifyFiguresAgreeWithTheEmulatorsLogOnPandaAndFr3) {
   for (const std::string robot : {"panda", "fr3"}) {
     const std::string out = (temp_dir() / ("verify_" + robot)).string();
-    const Process plan = run_csp({"plan", "transfer", "--scene", "ultrasound_abdomen", "--robot", robot, "--from",
+    const ProgramRun plan = run_csp({"plan", "transfer", "--scene", "ultrasound_abdomen", "--robot", robot, "--from",
                                   "ready", "--to", "scan_start_hover", "--verify", "--out", out});
     ASSERT_EQ(plan.exit_code, 0) << plan.err << plan.out;
     const nlohmann::json verify = nlohmann::json::parse(plan.out)["verify"];
     EXPECT_TRUE(verify["reflex"].empty()) << verify.dump();
 
     const std::string log_path = out + "/emulated.csv";
-    const Process emulate = run_csp({"emulate", out + "/scenario.yaml", "--log", log_path});
+    const ProgramRun emulate = run_csp({"emulate", out + "/scenario.yaml", "--log", log_path});
     ASSERT_EQ(emulate.exit_code, 0) << emulate.out << emulate.err;
     EXPECT_NE(emulate.out.find("finished without reflex"), std::string::npos);
     const JointLog measured = read_joint_log_csv(log_path);
@@ -595,17 +573,17 @@ TEST(PlanCommand, VerifyFiguresAgreeWithTheEmulatorsLogOnPandaAndFr3) {
 
 TEST(PlanCommand, BadRequestsExitTwoAndNoPlanInTheBudgetExitsOne) {
   const std::string out = (temp_dir() / "bad_plan").string();
-  const Process pose = run_csp({"plan", "transfer", "--scene", "ultrasound_abdomen", "--from", "ready", "--to",
+  const ProgramRun pose = run_csp({"plan", "transfer", "--scene", "ultrasound_abdomen", "--from", "ready", "--to",
                                 "nowhere", "--out", out});
   EXPECT_EQ(pose.exit_code, 2);
   EXPECT_NE(pose.err.find("no pose named `nowhere`"), std::string::npos) << pose.err;
-  const Process scene = run_csp({"plan", "task", "--scene", "no_such_scene.yaml", "--out", out});
+  const ProgramRun scene = run_csp({"plan", "task", "--scene", "no_such_scene.yaml", "--out", out});
   EXPECT_EQ(scene.exit_code, 2);
   EXPECT_NE(scene.err.find("--scene"), std::string::npos) << scene.err;
-  const Process criterion = run_csp({"plan", "excite", "--scene", "mis_rcm", "--criterion", "cond", "--out", out});
+  const ProgramRun criterion = run_csp({"plan", "excite", "--scene", "mis_rcm", "--criterion", "cond", "--out", out});
   EXPECT_EQ(criterion.exit_code, 2);
   EXPECT_NE(criterion.err.find("--criterion"), std::string::npos) << criterion.err;
-  const Process budget = run_csp({"plan", "transfer", "--scene", "craniotomy", "--from", "ready", "--to", "burr_hover",
+  const ProgramRun budget = run_csp({"plan", "transfer", "--scene", "craniotomy", "--from", "ready", "--to", "burr_hover",
                                   "--planner", "rrtstar", "--max-iterations", "2", "--out", out});
   EXPECT_EQ(budget.exit_code, 1) << budget.err;
   EXPECT_NE(budget.err.find("no plan"), std::string::npos) << budget.err;
