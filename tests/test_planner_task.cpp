@@ -151,7 +151,8 @@ TEST(TaskStates, AnchorsMatchTheScenesNamedHoverPoses) {
     EXPECT_LT((kdl_tcp(kdl, anchor).rotation.col(2) - kdl_tcp(kdl, named).rotation.col(2)).norm(), 1e-6);
     EXPECT_TRUE(planners::ik_branch(model, anchor) == planners::ik_branch(model, named));
     // Same TCP, same branch; the redundancy (null-space term) may differ: reported, not asserted.
-    RecordProperty(c.scene + "_" + c.pose + "_joint_distance", std::to_string((anchor - named).norm()));
+    std::cout << c.scene << " " << c.pose << ": anchor vs named pose, joint distance " << (anchor - named).norm()
+              << " rad, clearance " << plain.check(anchor).clearance << " vs " << plain.check(named).clearance << " m\n";
   }
 }
 
@@ -258,6 +259,19 @@ TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
     std::cout << "  worst distance from the task geometry " << worst_position << " m, worst axis angle " << worst_angle
               << " rad, min clearance " << min_clearance << " m, peak TCP speed " << peak_speed << " m/s\n";
 
+    // The anchor of a task configuration mid-path: its TCP retracted along its own tool axis (KDL),
+    // contact-free in the scene itself.
+    {
+      const Vector7& middle = path.states[path.states.size() / 2];
+      ClearanceChecker plain(model, scene);
+      const Vector7 anchor = planners::task_anchor(task, middle, plain);
+      const Transform at_middle = kdl_tcp(kdl, middle), at_anchor = kdl_tcp(kdl, anchor);
+      EXPECT_LT((at_anchor.rotation.col(2) - at_middle.rotation.col(2)).norm(), 1e-7);
+      const Vector3 back = at_middle.translation - at_anchor.translation;   // along +z, by the retract (+ insertion)
+      EXPECT_LT(back.cross(at_middle.rotation.col(2)).norm(), 1e-7);
+      EXPECT_GE(plain.check(anchor).clearance, 0.0);
+    }
+
     // Timed along the task: the scan at its speed; the drill ends advanced by `advance` past its standoff.
     const Transform end = kdl_tcp(kdl, log.q.back());
     if (const auto* scan = std::get_if<planners::UltrasoundScan>(&scene.task)) {
@@ -295,6 +309,28 @@ TEST(TaskConstraint, ScanOffTheSkinNamesTheSceneAndThePoint) {
     EXPECT_NE(what.find("ultrasound_abdomen.yaml"), std::string::npos) << what;
     EXPECT_NE(what.find("not on the skin of 'torso'"), std::string::npos) << what;
   }
+}
+
+// The rcm anchor of the vertical shaft (pivot 0 at mid insertion, by IK from the named pose) lands on
+// the scene's port_hover: tip 0.10 above the port, shaft along -z, same branch.
+TEST(TaskStates, RcmAnchorOfTheVerticalShaftMatchesPortHover) {
+  const Scene scene = planners::load_scene(scene_file("mis_rcm"));
+  const Model model = scene_model("panda", scene);
+  TaskConstraint task(model, scene);
+  ClearanceChecker plain(model, scene);
+  const Vector7& named = scene.pose("port_hover").q;
+  planners::IkOptions options;
+  options.tolerance = 1e-9;
+  const planners::TcpTarget vertical = task.target(0.0);
+  const planners::IkResult on_task = planners::solve_ik(planners::tcp_target_rows(model, vertical.position, vertical.axis), named,
+                                                        model.parameters().joint_limits, nullptr, options);
+  ASSERT_TRUE(on_task.converged);
+  const Vector7 anchor = planners::task_anchor(task, on_task.q, plain);
+  KdlPeer kdl(model);
+  EXPECT_LT((kdl_tcp(kdl, anchor).translation - kdl_tcp(kdl, named).translation).norm(), 1e-6);
+  EXPECT_LT((kdl_tcp(kdl, anchor).rotation.col(2) - kdl_tcp(kdl, named).rotation.col(2)).norm(), 1e-6);
+  EXPECT_TRUE(planners::ik_branch(model, anchor) == planners::ik_branch(model, named));
+  std::cout << "mis_rcm port_hover: anchor vs named pose, joint distance " << (anchor - named).norm() << " rad\n";
 }
 
 // A trocar moved (with the patient) out of the arm's reach: one error naming the scene and the state.

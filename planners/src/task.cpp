@@ -207,6 +207,14 @@ TcpTarget TaskConstraint::anchor_target(double s) const {
   return {contact - anchor_retract_ * on_task.axis, on_task.axis};
 }
 
+TcpTarget TaskConstraint::anchor_target(const Vector7& q) {
+  forward_kinematics(model_, data_, q);
+  const Transform& T = frame_pose(data_, Frame::kEndEffector);
+  const Vector3 axis = T.rotation.col(2);
+  const Vector3 contact = std::holds_alternative<UltrasoundScan>(scene_.task) ? T.translation : point_;
+  return {contact - anchor_retract_ * axis, axis};
+}
+
 bool TaskConstraint::within_ranges(const Vector7& q) {
   const auto* rcm = std::get_if<RcmPivot>(&scene_.task);
   if (rcm == nullptr) return true;
@@ -293,9 +301,9 @@ Vector7 solve_target(TaskConstraint& task, const TcpTarget& target, const Vector
 
 }  // namespace
 
-Vector7 task_anchor(TaskConstraint& task, double progress, const Vector7& q_task, ClearanceChecker& scene_checker) {
-  return solve_target(task, task.anchor_target(progress), q_task, "task configuration", scene_checker,
-                      "excitation anchor at progress " + std::to_string(progress), false);
+Vector7 task_anchor(TaskConstraint& task, const Vector7& q_task, ClearanceChecker& scene_checker) {
+  return solve_target(task, task.anchor_target(q_task), q_task, "task configuration", scene_checker,
+                      "excitation anchor at progress " + std::to_string(task.progress(q_task)), false);
 }
 
 TaskStates task_states(TaskConstraint& task, ClearanceChecker& contact_checker, ClearanceChecker& scene_checker) {
@@ -309,9 +317,9 @@ TaskStates task_states(TaskConstraint& task, ClearanceChecker& contact_checker, 
   };
   states.start = solve(task.progress_start(), "task start");
   states.end = solve(task.progress_end(), "task end");
-  states.anchors.push_back(task_anchor(task, task.progress_start(), states.start, scene_checker));
+  states.anchors.push_back(task_anchor(task, states.start, scene_checker));
   if ((task.anchor_target(task.progress_end()).position - task.anchor_target(task.progress_start()).position).norm() > 1e-9)
-    states.anchors.push_back(task_anchor(task, task.progress_end(), states.end, scene_checker));
+    states.anchors.push_back(task_anchor(task, states.end, scene_checker));
   return states;
 }
 

@@ -66,6 +66,8 @@ class TaskConstraint {
   // axis. ultrasound and rcm: the task's `hover`; burr: the patient clearance + 0.01 m (as the
   // scene's burr_hover: the bit clears the skull by its class clearance, strictly).
   TcpTarget anchor_target(double progress) const;
+  // The same for any configuration on the manifold, along its own tool axis.
+  TcpTarget anchor_target(const Vector7& q);
   double anchor_retract() const { return anchor_retract_; }
 
   // True when the state respects the task's inequalities (rcm: insertion within its range, pivot
@@ -98,8 +100,10 @@ class TaskConstraint {
   Matrix6x7 jacobian_ = Matrix6x7::Zero();
 };
 
-// The scene with the tool's capsules exempt from the task's contact obstacle (the probe's face on
-// the skin, the shaft through the port, the drill at the skull).
+// The scene the task's states are checked in: every patient solid keeps its clearance against the
+// arm's links; the tool's capsules see a copy of it (class "task_contact", clearance 0: touching,
+// no penetration), and the tool's tip capsule (the one ending at the TCP) is exempt from the
+// contact obstacle (the probe's face on the skin, the shaft through the port, the bit at the bone).
 Scene contact_scene(const Scene& scene, const std::string& contact_obstacle);
 
 struct TaskPathOptions {
@@ -124,7 +128,7 @@ struct TaskPath {
   Vector7 start = Vector7::Zero(), end = Vector7::Zero();   // task start and end (IK)
   std::vector<Vector7> anchors;       // hover configurations: start and end retracted (one if they coincide)
   std::vector<Vector7> waypoints;     // the planner's path on the manifold
-  std::vector<Vector7> states;        // densified (<= delta per joint) and projected: the task's configurations
+  std::vector<Vector7> states;        // densified (<= delta/2 per joint) and projected: the task's configurations
   std::vector<double> progress;       // task coordinate per state
   JointLog log;                       // timed, rest to rest, sampled at rate_hz
   double duration = 0.0;              // [s]
@@ -140,10 +144,10 @@ struct TaskStates {
 };
 TaskStates task_states(TaskConstraint& task, ClearanceChecker& contact_checker, ClearanceChecker& scene_checker);
 
-// The anchor at a progress value (anchor_target) by IK seeded at a task configuration q_task near
-// it (same branch), collision-free in the scene itself (no contact exemption). Throws TaskError
-// naming the scene if unreachable, in collision or on another branch.
-Vector7 task_anchor(TaskConstraint& task, double progress, const Vector7& q_task, ClearanceChecker& scene_checker);
+// The anchor of a task configuration q_task (e.g. any of TaskPath::states): anchor_target(q_task)
+// by IK seeded at q_task (same branch), collision-free in the scene itself (no contact exemption).
+// Throws TaskError naming the scene if unreachable, in collision or on another branch.
+Vector7 task_anchor(TaskConstraint& task, const Vector7& q_task, ClearanceChecker& scene_checker);
 
 // The whole task path: states, planning on the manifold, densification, timing, 1 kHz log.
 // `model` carries the scene's tool (with_tool). Throws TaskError naming the scene and what failed.
