@@ -1,6 +1,7 @@
 #include "csp/planners/excitation.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -24,6 +25,15 @@ using StateRow = Eigen::Matrix<double, 1, kState>;
 // Constraint groups, in margins() order.
 enum Group { kPosition, kVelocity, kAcceleration, kJerk, kTorque, kGroups };
 const char* const kGroupNames[kGroups] = {"q", "dq", "ddq", "dddq", "tau"};
+
+// The model's kinematics with the given 70 standard parameters (end effector and load folded in).
+Model model_with_standard_parameters(const Model& model, const Eigen::VectorXd& standard) {
+  ModelParameters p = model.parameters();
+  p.end_effector = p.load = RigidBodyInertia{};
+  for (int i = 0; i < kNumJoints; ++i)
+    p.links[i] = rigid_body(spatial_inertia(standard.segment<kLinkParameters>(kLinkParameters * i)));
+  return Model(p);
+}
 
 JointSample perturbed(const JointSample& s, int i, double h) {
   JointSample out = s;
@@ -189,26 +199,50 @@ double ExcitationProblem::criterion(const std::vector<double>& x, std::vector<do
   const double lambda = options_.task.empty() ? 0.0 : options_.task_weight;
   const Criterion c = design_criterion(periods * W.transpose() * W, task_information_, task_rows_, lambda);
   if (gradient) {
-    // dPhi/dW = 2 P W dPhi/dA; per sample, contract with dW/ds (forward differences of the regressor in
-    // (q, dq, ddq); the friction columns analytically) and chain through the Fourier terms.
+    // dPhi/dW = 2 P W dPhi/dA = G. Per sample, dPhi/ds = d/ds <G_k, W_k(s)> with W_k = Sigma^-1/2 R S, i.e.
+    // <H, R(s)> with H = Sigma^-1/2 G_k S. The inertial part is sum_j Y_j(s) h_j (row j of H on the base
+    // columns): the torque is linear in the standard parameters, so Y_j(s) h_j is joint j's RNEA torque
+    // of an arm whose parameters are h_j (taken as nominal + alpha h_j minus nominal, alpha keeping
+    // every mass positive): 7 RNEA per state instead of the 71 of a regressor. Its derivatives in
+    // (q, dq, ddq) by forward differences; the friction columns analytically.
     const Eigen::MatrixXd G = 2.0 * periods * W * c.gradient;
-    const int first_friction = id_.base_parameters();
+    const int nb = id_.base_parameters();
+    const Eigen::VectorXd& nominal = id_.standard();
+    double lightest = INFINITY;
+    for (int i = 0; i < kNumJoints; ++i) lightest = std::min(lightest, nominal[kLinkParameters * i]);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(x.size()));
     for (int k = 0; k < samples; ++k) {
       const JointSample s = design_state(free, k);
-      const Eigen::MatrixXd R = id_.rows(data, s);
-      const auto Gk = G.middleRows(kNumJoints * k, kNumJoints);
+      const Eigen::MatrixXd H = id_.noise_sigma().cwiseInverse().asDiagonal() * G.middleRows(kNumJoints * k, kNumJoints) *
+                                id_.column_scale().asDiagonal();
+      std::array<Model, kNumJoints> weighted{model_, model_, model_, model_, model_, model_, model_};
+      Vector7 alpha = Vector7::Zero();
+      for (int j = 0; j < kNumJoints; ++j) {
+        Eigen::VectorXd h = Eigen::VectorXd::Zero(kInertialParameters);
+        h(id_.base_columns()) = H.row(j).head(nb).transpose();
+        const double largest = h.cwiseAbs().maxCoeff();
+        if (largest == 0.0) continue;
+        alpha[j] = 1e-3 * lightest / largest;
+        weighted[j] = model_with_standard_parameters(model_, nominal + alpha[j] * h);
+      }
+      const auto phi = [&](const JointSample& state) {   // sum_j Y_j(state) h_j
+        Vector7 tau0, tau;
+        rnea(model_, data, state.q, state.dq, state.ddq, tau0);
+        double sum = 0.0;
+        for (int j = 0; j < kNumJoints; ++j)
+          if (alpha[j] != 0.0) {
+            rnea(weighted[j], data, state.q, state.dq, state.ddq, tau);
+            sum += (tau[j] - tau0[j]) / alpha[j];
+          }
+        return sum;
+      };
+      const double phi0 = phi(s);
       StateRow ds;
-      for (int i = 0; i < kState; ++i) {
-        Eigen::MatrixXd dR = (id_.rows(data, perturbed(s, i, kStep)) - R) / kStep;
-        dR.rightCols(kFrictionParametersPerJoint * kNumJoints).setZero();
-        if (i >= kNumJoints && i < 2 * kNumJoints) {
-          const int j = i - kNumJoints, col = first_friction + kFrictionParametersPerJoint * j;
-          const double th = std::tanh(s.dq[j] / kCoulombVelocity);
-          dR(j, col) = 1.0;
-          dR(j, col + 1) = (1.0 - th * th) / kCoulombVelocity;
-        }
-        ds[i] = Gk.cwiseProduct(id_.scale_rows(dR)).sum();
+      for (int i = 0; i < kState; ++i) ds[i] = (phi(perturbed(s, i, kStep)) - phi0) / kStep;
+      for (int j = 0; j < kNumJoints; ++j) {   // d/d dq_j of dq_j and tanh(dq_j / v)
+        const int col = nb + kFrictionParametersPerJoint * j;
+        const double th = std::tanh(s.dq[j] / kCoulombVelocity);
+        ds[kNumJoints + j] += H(j, col) + H(j, col + 1) * (1.0 - th * th) / kCoulombVelocity;
       }
       g += chain(ds, k);
     }
@@ -333,7 +367,7 @@ std::vector<double> ExcitationProblem::margins(const std::vector<double>& x, std
         for (int i = 0; i < kNumJoints; ++i) dc[i] = (options_.clearance(s.q + kStep * Vector7::Unit(i)) - c) / kStep;
         gc = chain(dc, k) / kClearanceScale;
       }
-      groups.back().add(c / kClearanceScale, gc);
+      groups.back().add((c - options_.clearance_buffer) / kClearanceScale, gc);
     }
   }
   std::vector<double> out;
@@ -460,7 +494,7 @@ ExcitationResult ExcitationProblem::solve() const {
     const double value = criterion(x, nullptr);
     if (value < best_value) best_value = value, best = std::move(x);
   }
-  ExcitationResult result{series(best), 1.0, 0.0, {}, {}, best_value, 0, ""};
+  ExcitationResult result{series(best), 1.0, 1.0, 0.0, {}, {}, best_value, 0, ""};
 
   // MMA (Svanberg 2002, NLopt's conservative CCSA variant): each outer iterate is feasible when the
   // start is, so any evaluation budget ends on a plan within the design margins. SLSQP was tried
@@ -515,9 +549,26 @@ ExcitationResult ExcitationProblem::solve() const {
   }
   result.evaluations = context.evaluations;
 
-  // Check at 1 kHz; slow down in closed form if the design samples missed a peak.
+  // Check at 1 kHz. A contact between design samples: shrink toward the anchor (clearance > 0 there)
+  // by bisection. A rate limit over: slow down in closed form.
+  const auto shrunk = [&](double s) {
+    std::vector<double> x = context.best_x;
+    for (double& v : x) v *= s;
+    return this->series(x);
+  };
   FourierSeries series = this->series(context.best_x);
   result.usage = usage(series, series.period());
+  if (result.usage.min_clearance < 0.0) {
+    double good = 0.0, bad = 1.0;
+    for (int i = 0; i < 12; ++i) {
+      const double mid = 0.5 * (good + bad);
+      const FourierSeries candidate = shrunk(mid);
+      (usage(candidate, candidate.period()).min_clearance >= 0.0 ? good : bad) = mid;
+    }
+    result.amplitude_scale = good;
+    series = shrunk(good);
+    result.usage = usage(series, series.period());
+  }
   if (!result.usage.within()) {
     result.time_scale = std::max(1.0, time_scale_into_limits(*this, series));
     series = time_scaled(series, result.time_scale);

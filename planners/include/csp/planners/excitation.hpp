@@ -53,6 +53,7 @@ struct ExcitationOptions {
   double task_weight = 1.0;           // lambda
   ExcitationLimits limits;
   ClearanceFunction clearance;        // optional
+  double clearance_buffer = 0.005;    // [m] asked of the design samples on top of clearance >= 0 (motion between them)
   unsigned seed = 1;
   int random_starts = 20;
   int max_evaluations = 300;          // NLopt budget (criterion + constraints with gradients)
@@ -68,6 +69,7 @@ struct ExcitationCriteria {
 struct ExcitationResult {
   FourierSeries series;               // rest to rest at the anchor, after time scaling
   double time_scale = 1.0;            // k >= 1 applied after the optimisation (1: none needed)
+  double amplitude_scale = 1.0;       // < 1: shrunk toward the anchor because the 1 kHz check found a contact
   double duration = 0.0;              // periods / fundamental [s]
   ExcitationCriteria criteria;
   LimitUsage usage;                   // at 1 kHz over one period

@@ -42,6 +42,8 @@ class IdentificationModel {
   const Vector7& noise_sigma() const { return sigma_; }
   const Eigen::VectorXd& column_scale() const { return scale_; }   // S
   const Model& model() const { return model_; }
+  const std::vector<int>& base_columns() const { return base_; }   // standard-parameter index of each base column
+  const Eigen::VectorXd& standard() const { return standard_; }     // the model's own 70
   // "link3.hz" for base columns (the standard parameter that carries the combination), "joint2.viscous" ...
   std::vector<std::string> parameter_names() const;
 
