@@ -503,7 +503,7 @@ std::map<std::string, std::string> files_of(const std::string& dir) {
 
 // The same request in two processes, and again from its plan.yaml: the same bytes in every file.
 TEST(PlanCommand, TheSamePlanTwiceAndRebuiltGivesByteIdenticalFiles) {
-  for (const std::vector<std::string> command :
+  for (const std::vector<std::string>& command :
        {std::vector<std::string>{"transfer", "--scene", "ultrasound_abdomen", "--from", "ready", "--to",
                                  "scan_end_hover", "--seed", "7", "--verify"},
         std::vector<std::string>{"task", "--scene", "mis_rcm", "--robot", "fr3", "--seed", "3"}}) {
