@@ -22,6 +22,7 @@ Command add_replay_command(CLI::App& app);
 Command add_log_command(CLI::App& app);
 Command add_gap_command(CLI::App& app);
 Command add_can_command(CLI::App& app);
+Command add_plan_command(CLI::App& app);
 
 struct WorkspaceArguments {
   ModelArguments model;

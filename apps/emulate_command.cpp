@@ -27,11 +27,12 @@ struct EmulateArguments {
 // external torque, accumulated cycle by cycle.
 class Summary {
  public:
-  Summary(const rt::RampedSineReference& trajectory, const Vector7& q0) : trajectory_(trajectory), q0_(q0) {}
+  Summary(std::shared_ptr<const rt::JointReference> trajectory, const Vector7& q0)
+      : trajectory_(std::move(trajectory)), q0_(q0) {}
 
   void add(const rt::RobotState& state, double motion_time) {
     Vector7 q_ref, dq_ref, ddq_ref;
-    trajectory_.evaluate(q0_, motion_time, q_ref, dq_ref, ddq_ref);
+    trajectory_->evaluate(q0_, motion_time, q_ref, dq_ref, ddq_ref);
     const Vector7 error = Vector7(state.q.data()) - q_ref;
     squared_error_ += error.cwiseAbs2();
     max_error_ = max_error_.cwiseMax(error.cwiseAbs());
@@ -54,7 +55,7 @@ class Summary {
   }
 
  private:
-  rt::RampedSineReference trajectory_;
+  std::shared_ptr<const rt::JointReference> trajectory_;
   Vector7 q0_;
   Vector7 squared_error_ = Vector7::Zero(), max_error_ = Vector7::Zero(), max_tau_ext_ = Vector7::Zero();
   long long count_ = 0;

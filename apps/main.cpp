@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   add(add_log_command);
   add(add_gap_command);
   add(add_can_command);
+  add(add_plan_command);
 
   // CLI11 would report an unknown command as a missing one; name it instead.
   std::string known;

@@ -4,10 +4,14 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <cstdio>
+#include <iterator>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "csp/dynamics/algorithms.hpp"
@@ -116,6 +120,38 @@ inline const std::filesystem::path& temp_dir() {
   };
   static const Directory directory;
   return directory.path;
+}
+
+// A program run to its end: exit code, standard output, standard error.
+struct ProgramRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+// Runs `executable args...` (each argument shell-quoted): stdout through a pipe, stderr through a
+// file in temp_dir().
+inline ProgramRun run_program(const std::string& executable, const std::vector<std::string>& args) {
+  static int count = 0;
+  const std::string err_path = (temp_dir() / ("stderr_run_" + std::to_string(count++) + ".txt")).string();
+  auto quote = [](const std::string& arg) {
+    std::string quoted = "'";
+    for (const char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+  };
+  std::string command = quote(executable);
+  for (const auto& arg : args) command += " " + quote(arg);
+  command += " 2>" + quote(err_path);
+  ProgramRun run;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (!pipe) throw std::runtime_error("popen failed: " + command);
+  char buffer[4096];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) run.out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream err(err_path);
+  run.err.assign(std::istreambuf_iterator<char>(err), std::istreambuf_iterator<char>());
+  std::filesystem::remove(err_path);
+  return run;
 }
 
 // The message of reading a joint log that must fail, or "no error".

@@ -242,7 +242,7 @@ TEST(EmulatorEstimator, ExternalForceRecoveredByOFExtHatK) {
   // The K frame of the hand: TCP 0.1034 m beyond the flange, flange 0.107 m along link 7's z.
   settings.external_wrenches.push_back({7, Vector3(0.0, 0.0, 0.107 + 0.1034), force, Vector3::Zero(), 0.1, 10.0, 0.0});
   rt::Scenario scenario = default_scenario();
-  scenario.controller.trajectory.amplitude.setZero();   // joint impedance holding the start pose
+  scenario.controller.trajectory = std::make_shared<rt::RampedSineReference>();   // joint impedance holding the start pose
   Emulator emulator(settings);
   const auto builtin = rt::make_controller(scenario.controller, {}, emulator);
   rt::LoopOptions options;
@@ -347,7 +347,7 @@ TEST(EmulatorTracking, ExcitationTrackedWithinBound) {
     options.max_duration = scenario.duration;
     options.observer = [&](const rt::RobotState& s, const rt::CycleInfo&) {
       Vector7 q_ref, dq_ref, ddq_ref;
-      scenario.controller.trajectory.evaluate(q0, s.time.toSec(), q_ref, dq_ref, ddq_ref);
+      scenario.controller.trajectory->evaluate(q0, s.time.toSec(), q_ref, dq_ref, ddq_ref);
       worst = worst.cwiseMax((q_of(s) - q_ref).cwiseAbs());
       travel = travel.cwiseMax((q_of(s) - q0).cwiseAbs());
     };
@@ -467,7 +467,7 @@ TEST(EmulatorFaults, CommunicationViolationAfterExactly20Lost) {
     options.faults.bursts.push_back({0.1, lost});
     options.max_duration = 0.3;
     rt::Scenario scenario = default_scenario();
-    scenario.controller.trajectory.amplitude.setZero();
+    scenario.controller.trajectory = std::make_shared<rt::RampedSineReference>();   // hold the start pose
     const auto builtin = rt::make_controller(scenario.controller, {}, emulator);
     const rt::MotionResult result = rt::run_motion(emulator, builtin.mode, builtin.controller, options);
     EXPECT_EQ(result.timing.lost_commands, static_cast<uint64_t>(lost));
@@ -605,7 +605,7 @@ TEST(EmulatorFaults, ControllerFailureWithoutMotionIsIgnored) {
 TEST(EmulatorState, SuccessRateOverTheLast100Commands) {
   Emulator emulator(matched_settings());
   rt::Scenario scenario = default_scenario();
-  scenario.controller.trajectory.amplitude.setZero();
+  scenario.controller.trajectory = std::make_shared<rt::RampedSineReference>();   // hold the start pose
   const auto builtin = rt::make_controller(scenario.controller, {}, emulator);
   rt::LoopOptions options;
   options.faults.loss_probability = 0.1;

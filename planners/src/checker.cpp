@@ -27,6 +27,10 @@ ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene) : mod
   for (const auto& c : franka_arm_capsules()) moving_.push_back({std::string(c.name), c.frame, c.capsule});
   for (const auto& c : scene.tool.capsules) moving_.push_back({c.name, CapsuleFrame::kFlange, c.capsule});
 
+  for (const auto& [name, required] : scene.clearance) classes_.push_back(name);
+  auto class_index = [&](const std::string& name) {
+    return static_cast<int>(std::find(classes_.begin(), classes_.end(), name) - classes_.begin());
+  };
   for (const auto& o : scene.obstacles)
     statics_.push_back({o.name, o.obstacle_class, o.shape, shape_box(o.shape), std::holds_alternative<HalfSpace>(o.shape)});
 
@@ -42,12 +46,12 @@ ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene) : mod
     for (int s = 0; s < static_cast<int>(statics_.size()); ++s) {
       const auto& exempt = scene.obstacles[s].exempt;
       if (std::find(exempt.begin(), exempt.end(), moving_[m].name) != exempt.end()) continue;
-      pairs_.push_back({m, s, false, scene.clearance.at(statics_[s].obstacle_class), reach(m, 0)});
+      pairs_.push_back({m, s, false, class_index(statics_[s].obstacle_class), scene.clearance.at(statics_[s].obstacle_class), reach(m, 0)});
     }
   }
   const double self = scene.clearance.at("self");
   auto add_self = [&](int distal, int proximal) {
-    pairs_.push_back({distal, proximal, true, self, reach(distal, static_cast<int>(moving_[proximal].frame))});
+    pairs_.push_back({distal, proximal, true, class_index("self"), self, reach(distal, static_cast<int>(moving_[proximal].frame))});
   };
   for (const auto& [a, b] : franka_arm_self_pairs()) add_self(b, a);
   for (int m = kNumArmCapsules; m < static_cast<int>(moving_.size()); ++m)
@@ -55,6 +59,9 @@ ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene) : mod
 
   placed_.resize(moving_.size());
   placed_boxes_.resize(moving_.size());
+  best_.resize(1);
+  best_by_class_.resize(classes_.size());
+  best_pair_.resize(classes_.size());
 }
 
 void ClearanceChecker::place(const Vector7& q) {
@@ -71,11 +78,17 @@ Distance ClearanceChecker::pair_distance(const Pair& pair) const {
   return std::visit([&](const auto& shape) { return distance(capsule, shape); }, statics_[pair.other].shape);
 }
 
-StateClearance ClearanceChecker::evaluate(const Vector7& joint_step, bool broad_phase) {
-  StateClearance best;
-  best.clearance = std::numeric_limits<double>::infinity();
-  const Pair* best_pair = nullptr;
+void ClearanceChecker::evaluate(const Vector7& joint_step, bool broad_phase, std::vector<StateClearance>& best) {
+  const bool by_class = &best == &best_by_class_;
+  std::vector<const Pair*>& best_pair = best_pair_;
+  std::fill(best_pair.begin(), best_pair.end(), nullptr);
+  for (StateClearance& b : best) {
+    b = StateClearance{};
+    b.clearance = std::numeric_limits<double>::infinity();
+  }
   for (const Pair& pair : pairs_) {
+    const std::size_t slot = by_class ? static_cast<std::size_t>(pair.class_index) : 0;
+    StateClearance& tightest = best[slot];
     const double margin = pair.required + pair.reach.dot(joint_step);
     if (broad_phase) {
       const bool half_space = !pair.self && statics_[pair.other].half_space;
@@ -83,26 +96,36 @@ StateClearance ClearanceChecker::evaluate(const Vector7& joint_step, bool broad_
         const Aabb& other = pair.self ? placed_boxes_[pair.other] : statics_[pair.other].box;
         // The gap bounds the distance only while positive: overlapping boxes say nothing about the depth.
         const double gap = distance_lower_bound(placed_boxes_[pair.moving], other);
-        if (gap > 0.0 && gap - margin >= best.clearance) continue;
+        if (gap > 0.0 && gap - margin >= tightest.clearance) continue;
       }
     }
     const Distance d = pair_distance(pair);
-    if (d.distance - margin < best.clearance) {
-      best.clearance = d.distance - margin;
-      best.distance = d.distance;
-      best.on_moving = d.on_a;
-      best.on_other = d.on_b;
-      best_pair = &pair;
+    if (d.distance - margin < tightest.clearance) {
+      tightest.clearance = d.distance - margin;
+      tightest.distance = d.distance;
+      tightest.on_moving = d.on_a;
+      tightest.on_other = d.on_b;
+      best_pair[slot] = &pair;
     }
   }
-  if (best_pair) {
-    best.moving = moving_[best_pair->moving].name;
-    best.other = best_pair->self ? std::string_view(moving_[best_pair->other].name)
-                                 : std::string_view(statics_[best_pair->other].name);
-    best.obstacle_class = best_pair->self ? std::string_view("self")
-                                          : std::string_view(statics_[best_pair->other].obstacle_class);
+  for (std::size_t i = 0; i < best.size(); ++i) {
+    const Pair* p = best_pair[i];
+    if (!p) continue;
+    best[i].moving = moving_[p->moving].name;
+    best[i].other = p->self ? std::string_view(moving_[p->other].name) : std::string_view(statics_[p->other].name);
+    best[i].obstacle_class = classes_[p->class_index];
   }
-  return best;
+}
+
+StateClearance ClearanceChecker::evaluate(const Vector7& joint_step, bool broad_phase) {
+  evaluate(joint_step, broad_phase, best_);
+  return best_[0];
+}
+
+const std::vector<StateClearance>& ClearanceChecker::check_by_class(const Vector7& q, bool broad_phase) {
+  place(q);
+  evaluate(Vector7::Zero(), broad_phase, best_by_class_);
+  return best_by_class_;
 }
 
 StateClearance ClearanceChecker::check(const Vector7& q) {

@@ -18,7 +18,7 @@ struct ControllerContext {
   // Advances time and evaluates the reference trajectory.
   void advance(Duration period) {
     time += period.toSec();
-    spec.trajectory.evaluate(q0, time, q_d, dq_d, ddq_d);
+    spec.trajectory->evaluate(q0, time, q_d, dq_d, ddq_d);
   }
 
   Model model;

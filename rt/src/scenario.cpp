@@ -2,6 +2,7 @@
 
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -11,6 +12,9 @@
 
 namespace csp::rt {
 namespace {
+
+// A trajectory file's first row may differ from initial_q by the rounding of a printed pose [rad].
+constexpr double kTrajectoryStartTolerance = 1e-6;
 
 Vector7 non_negative7(const Field& f) {
   const Vector7 v = f.vector<7>();
@@ -43,15 +47,39 @@ ModelParameters build_model(const RobotConfig& robot, const ModelOptions& option
   }
 }
 
-void read_trajectory(const Field& f, RampedSineReference& trajectory) {
-  f.allow_only({"amplitude", "frequency_hz", "phase", "ramp"});
-  trajectory.amplitude = non_negative7(f["amplitude"]);
-  trajectory.frequency_hz = non_negative7(f["frequency_hz"]);
-  if (f.has("phase")) trajectory.phase = f["phase"].vector<7>();
-  if (f.has("ramp")) trajectory.ramp = non_negative(f["ramp"]);
+// controller.trajectory: a ramped sine, or {file: F}, a joint log found relative to the scenario
+// that must start at initial_q.
+std::shared_ptr<const JointReference> read_trajectory(const Field& f, const Vector7& q_initial) {
+  if (f.has("file")) {
+    f.allow_only({"file"});
+    const std::filesystem::path file = f["file"].text();
+    const std::string path =
+        (file.is_absolute() ? file : std::filesystem::path(f.file()).parent_path() / file).string();
+    JointLog log;
+    try {
+      log = read_joint_log_csv(path);
+    } catch (const JointLogError& e) {
+      f["file"].fail("a joint log (docs/joint-log.md), relative to this scenario: " + std::string(e.what()));
+    }
+    auto reference = std::make_shared<JointLogReference>(log);
+    // Where the robot starts is where the file starts: a first row elsewhere is a position step.
+    const Vector7 offset = (reference->first_q() - q_initial).cwiseAbs();
+    Eigen::Index joint = 0;
+    if (offset.maxCoeff(&joint) > kTrajectoryStartTolerance)
+      f["file"].fail("a trajectory whose first row is initial_q (joint " + std::to_string(joint + 1) + " starts " +
+                     std::to_string(offset[joint]) + " rad away)");
+    return reference;
+  }
+  f.allow_only({"amplitude", "frequency_hz", "phase", "ramp", "file"});
+  auto trajectory = std::make_shared<RampedSineReference>();
+  trajectory->amplitude = non_negative7(f["amplitude"]);
+  trajectory->frequency_hz = non_negative7(f["frequency_hz"]);
+  if (f.has("phase")) trajectory->phase = f["phase"].vector<7>();
+  if (f.has("ramp")) trajectory->ramp = non_negative(f["ramp"]);
+  return trajectory;
 }
 
-void read_controller(const Field& f, ControllerSpec& c) {
+void read_controller(const Field& f, const Vector7& q_initial, ControllerSpec& c) {
   f.allow_only({"type", "stiffness", "damping", "feedforward", "translational_stiffness", "rotational_stiffness",
                 "trajectory"});
   c.type = f["type"].text();
@@ -63,7 +91,12 @@ void read_controller(const Field& f, ControllerSpec& c) {
   if (f.has("feedforward")) c.feedforward = f["feedforward"].boolean();
   if (f.has("translational_stiffness")) c.translational_stiffness = non_negative(f["translational_stiffness"]);
   if (f.has("rotational_stiffness")) c.rotational_stiffness = non_negative(f["rotational_stiffness"]);
-  if (f.has("trajectory")) read_trajectory(f["trajectory"], c.trajectory);
+  if (f.has("trajectory")) {
+    if (c.type == "float" || c.type == "cartesian_impedance")
+      f["trajectory"].fail("no trajectory for a " + c.type + " controller (joint_impedance, joint_position and "
+                           "joint_velocity track one)");
+    c.trajectory = read_trajectory(f["trajectory"], q_initial);
+  }
   if (c.type == "joint_impedance" && !f.has("stiffness")) f.fail("`stiffness` for a joint_impedance controller");
 }
 
@@ -169,6 +202,33 @@ void RampedSineReference::evaluate(const Vector7& q0, double t, Vector7& q, Vect
   }
 }
 
+JointLogReference::JointLogReference(const JointLog& log) : t_(log.t), q_(log.q), dq_(log.dq), ddq_(log.ddq) {
+  if (ddq_.size() != t_.size()) {
+    ddq_.assign(t_.size(), Vector7::Zero());
+    for (std::size_t k = 0; k < t_.size(); ++k) {
+      const std::size_t a = k == 0 ? 0 : k - 1, b = std::min(k + 1, t_.size() - 1);
+      ddq_[k] = (dq_[b] - dq_[a]) / (t_[b] - t_[a]);
+    }
+  }
+}
+
+void JointLogReference::evaluate(const Vector7&, double t, Vector7& q, Vector7& dq, Vector7& ddq) const {
+  const double time = t_.front() + t;
+  if (time >= t_.back()) {   // held at the last position, at rest
+    q = q_.back();
+    dq.setZero();
+    ddq.setZero();
+    return;
+  }
+  // The row k with t_k <= time < t_k+1 (before the first row: the first).
+  const auto next = std::upper_bound(t_.begin(), t_.end(), time);
+  const std::size_t k = next == t_.begin() ? 0 : static_cast<std::size_t>(next - t_.begin()) - 1;
+  const double s = std::clamp((time - t_[k]) / (t_[k + 1] - t_[k]), 0.0, 1.0);
+  q = q_[k] + s * (q_[k + 1] - q_[k]);
+  dq = dq_[k] + s * (dq_[k + 1] - dq_[k]);
+  ddq = ddq_[k] + s * (ddq_[k + 1] - ddq_[k]);
+}
+
 Scenario load_scenario(const std::string& path) {
   const YAML::Node root = load_yaml_file(path, "scenario file");
   const Field top(root, path, "");
@@ -232,7 +292,7 @@ Scenario load_scenario(const std::string& path) {
     s.seed = static_cast<uint64_t>(top["seed"].whole_number(0, int64_t{1} << 53));
   }
   if (top.has("robot_settings")) read_robot_settings(top["robot_settings"], s.emulator);
-  read_controller(top["controller"], s.controller);
+  read_controller(top["controller"], s.emulator.q_initial, s.controller);
   if (top.has("faults")) read_faults(top["faults"], s);
   if (top.has("external_wrenches")) {
     const Field wrenches = top["external_wrenches"];

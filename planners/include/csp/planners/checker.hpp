@@ -37,6 +37,12 @@ class ClearanceChecker {
   // The naive baseline (and the test oracle of the broad phase): every pair exactly.
   StateClearance check_all_pairs(const Vector7& q);
 
+  // The tightest pair of each obstacle class (classes(): the scene's, and "self") in one pass, for
+  // clearance reports per class; a class without a pair (every obstacle exempt) reports +infinity.
+  // broad_phase false: every pair exactly (the naive baseline).
+  const std::vector<StateClearance>& check_by_class(const Vector7& q, bool broad_phase = true);
+  const std::vector<std::string>& classes() const { return classes_; }
+
   // True only if no state on the straight joint-space segment q_a -> q_b is in collision
   // (conservative advancement, Schwarzer, Saha & Latombe 2005). Along the segment a point of link k
   // moves by at most sum_{j<=k} R_jk |dq_j| (R_jk from reach_from_joint); for a self pair (i, k),
@@ -64,13 +70,16 @@ class ClearanceChecker {
     int moving;
     int other;         // index into statics_, or into moving_ when self
     bool self;
+    int class_index;   // into classes_
     double required;   // clearance of the class
     Vector7 reach;     // per joint: how far a joint step can change the distance (0 for joints that cannot)
   };
 
   void place(const Vector7& q);
   Distance pair_distance(const Pair& pair) const;
-  // Minimum over pairs of distance - required - reach . joint_step (joint_step = 0 for a state).
+  // Minimum over pairs of distance - required - reach . joint_step (joint_step = 0 for a state):
+  // into best_[0], or per class into best_by_class_[class_index] when `best` is best_by_class_.
+  void evaluate(const Vector7& joint_step, bool broad_phase, std::vector<StateClearance>& best);
   StateClearance evaluate(const Vector7& joint_step, bool broad_phase);
 
   Model model_;
@@ -78,6 +87,9 @@ class ClearanceChecker {
   std::vector<Moving> moving_;
   std::vector<Static> statics_;
   std::vector<Pair> pairs_;
+  std::vector<std::string> classes_;
+  std::vector<StateClearance> best_, best_by_class_;
+  std::vector<const Pair*> best_pair_;   // per slot of `best`, the pair found (no allocation per check)
   std::vector<Capsule> placed_;     // base frame, after place(): arm capsules, then the tool's
   std::vector<Aabb> placed_boxes_;
 };

@@ -5,12 +5,15 @@
 // expected.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "csp/rt/control_loop.hpp"
 #include "csp/rt/emulator.hpp"
 #include "csp/rt/hand.hpp"
+#include "csp/io/joint_log.hpp"
 
 namespace csp::rt {
 
@@ -18,17 +21,40 @@ namespace csp::rt {
 // derivatives, all smooth: r(x) = 10x^3 - 15x^4 + 6x^5, x = t / duration; r' and r'' vanish at both ends.
 void quintic_ramp(double t, double duration, double& r, double& dr, double& ddr);
 
-// The scenario controller's reference: one sine per joint around the start pose, ramped in,
+// The reference a scenario's joint controller tracks: desired position, velocity and
+// acceleration at motion time t [s] (t = 0 when the motion starts, from the start pose q0).
+class JointReference {
+ public:
+  virtual ~JointReference() = default;
+  virtual void evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const = 0;
+};
+
+// One sine per joint around the start pose, ramped in,
 // q_d = q0 + r(t) A (sin(2 pi f t + phase) - sin(phase)), r a quintic ramp from 0 to 1 over
-// `ramp` seconds, so q_d starts at q0 at rest.
-struct RampedSineReference {
+// `ramp` seconds, so q_d starts at q0 at rest. Zero amplitude holds the start pose.
+struct RampedSineReference final : JointReference {
   Vector7 amplitude = Vector7::Zero();      // [rad]
   Vector7 frequency_hz = Vector7::Zero();   // [Hz]
   Vector7 phase = Vector7::Zero();          // [rad]
   double ramp = 1.0;                        // [s]
 
-  // Desired position, velocity and acceleration at time t.
-  void evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const;
+  void evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const override;
+};
+
+// A trajectory file (a joint log, docs/joint-log.md: its t, q, dq and, if present, ddq) played
+// from its first row at t = 0, linearly interpolated between rows, and held at its last position
+// (at rest) after its end. Without a ddq column the acceleration is the central difference of dq.
+class JointLogReference final : public JointReference {
+ public:
+  explicit JointLogReference(const JointLog& log);   // a log as read_joint_log_csv validates it
+
+  void evaluate(const Vector7& q0, double t, Vector7& q, Vector7& dq, Vector7& ddq) const override;
+  double duration() const { return t_.back() - t_.front(); }
+  const Vector7& first_q() const { return q_.front(); }
+
+ private:
+  std::vector<double> t_;
+  std::vector<Vector7> q_, dq_, ddq_;
 };
 
 struct ControllerSpec {
@@ -40,7 +66,8 @@ struct ControllerSpec {
   Vector7 damping = Vector7::Zero();     // float, joint_impedance [N m s/rad]
   bool feedforward = true;               // joint_impedance: add M(q) ddq_d + c(q, dq)
   double translational_stiffness = 150.0, rotational_stiffness = 10.0;   // cartesian_impedance
-  RampedSineReference trajectory;       // zero amplitude: hold the start pose
+  // joint_impedance, joint_position, joint_velocity: the reference (default: hold the start pose).
+  std::shared_ptr<const JointReference> trajectory = std::make_shared<RampedSineReference>();
 };
 
 // Faults of the controller itself, at motion time [s].
