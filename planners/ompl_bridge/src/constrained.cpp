@@ -8,7 +8,6 @@
 #include <ompl/base/ConstrainedSpaceInformation.h>
 #include <ompl/base/Constraint.h>
 #include <ompl/base/spaces/constraint/ProjectedStateSpace.h>
-#include <ompl/geometric/PathSimplifier.h>
 #include <ompl/geometric/SimpleSetup.h>
 
 #include "ompl_common.hpp"
@@ -90,33 +89,13 @@ Result plan_on_manifold(const Request& request, const Callbacks& callbacks, cons
   setup.setup();
 
   Result result;
-  result.planner = setup.getPlanner()->getName();
-  IterationBudget budget(request.max_iterations);
-  const ob::PlannerStatus status = setup.solve(budget.condition());
-  result.iterations = budget.used();
-  result.cap_hit = budget.exhausted();
-  if (status != ob::PlannerStatus::EXACT_SOLUTION) {
-    if (status == ob::PlannerStatus::APPROXIMATE_SOLUTION) {
-      result.best_attempt = waypoints(setup.getSolutionPath());
-      result.best_distance = setup.getProblemDefinition()->getSolutionDifference();
-    }
-    result.message = "no path on the manifold within " + std::to_string(request.max_iterations) + " iterations of " +
-                     result.planner + " (OMPL: " + status.asString() + ")";
-    result.seconds = seconds_since(started);
-    return result;
-  }
+  if (!solve_within_budget(setup, request, "path on the manifold", result, started)) return result;
 
-  // Fixed step counts (deterministic); shortcuts are geodesics checked by the constrained motion
-  // validator. Then every geodesic is cut into its delta steps: the returned states are on the
-  // manifold and at most about delta apart, each one checked.
+  // Shortcuts are geodesics checked by the constrained motion validator. Then every geodesic is cut
+  // into its delta steps: the returned states are on the manifold and at most about delta apart, each
+  // one checked.
   og::PathGeometric& path = setup.getSolutionPath();
-  if (request.simplify_steps > 0) {
-    og::PathSimplifier simplifier(si);
-    const auto steps = static_cast<unsigned int>(request.simplify_steps);
-    simplifier.reduceVertices(path, steps, steps / 2);
-    simplifier.shortcutPath(path, steps, steps / 2);
-    simplifier.reduceVertices(path, steps, steps / 2);
-  }
+  simplify(path, si, request.simplify_steps);
   path.interpolate();
   std::vector<Joints> found = waypoints(path);
   result.seconds = seconds_since(started);

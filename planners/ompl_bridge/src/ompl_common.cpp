@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include <ompl/config.h>
+#include <ompl/geometric/PathSimplifier.h>
 #include <ompl/geometric/planners/informedtrees/BITstar.h>
 #include <ompl/geometric/planners/prm/LazyPRMstar.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
@@ -219,6 +220,36 @@ bool path_is_free(const std::vector<Joints>& path, const Callbacks& callbacks) {
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool solve_within_budget(og::SimpleSetup& setup, const Request& request, const std::string& search, Result& result,
+                         std::chrono::steady_clock::time_point started) {
+  result.planner = setup.getPlanner()->getName();
+  IterationBudget budget(request.max_iterations);
+  const ob::PlannerStatus status = setup.solve(budget.condition());
+  result.iterations = budget.used();
+  result.cap_hit = budget.exhausted();
+  // The solution path is the problem definition's own copy. OMPL 1.5.2's LazyPRM frees its roadmap
+  // only in clear() (its destructor leaks it; fixed upstream by ompl/ompl#909).
+  setup.getPlanner()->clear();
+  if (status == ob::PlannerStatus::EXACT_SOLUTION) return true;
+  if (status == ob::PlannerStatus::APPROXIMATE_SOLUTION) {
+    result.best_attempt = waypoints(setup.getSolutionPath());
+    result.best_distance = setup.getProblemDefinition()->getSolutionDifference();
+  }
+  result.message = "no " + search + " within " + std::to_string(request.max_iterations) + " iterations of " +
+                   result.planner + " (OMPL: " + status.asString() + ")";
+  result.seconds = seconds_since(started);
+  return false;
+}
+
+void simplify(og::PathGeometric& path, const ob::SpaceInformationPtr& si, int steps) {
+  if (steps <= 0) return;
+  og::PathSimplifier simplifier(si);
+  const auto n = static_cast<unsigned int>(steps);
+  simplifier.reduceVertices(path, n, n / 2);
+  simplifier.shortcutPath(path, n, n / 2);
+  simplifier.reduceVertices(path, n, n / 2);
 }
 
 }  // namespace detail

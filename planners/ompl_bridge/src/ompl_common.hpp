@@ -16,6 +16,7 @@
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/SimpleSetup.h>
 
 #include "csp/planners/ompl_bridge.hpp"
 
@@ -90,5 +91,16 @@ std::vector<Joints> waypoints(const og::PathGeometric& path);
 bool path_is_free(const std::vector<Joints>& path, const Callbacks& callbacks);
 
 double seconds_since(std::chrono::steady_clock::time_point start);
+
+// Solves within request.max_iterations and fills result's planner, iterations and cap_hit. Without an
+// exact solution: the best attempt (OMPL's approximate solution), a message naming `search`, the time;
+// returns false.
+bool solve_within_budget(og::SimpleSetup& setup, const Request& request, const std::string& search, Result& result,
+                         std::chrono::steady_clock::time_point started);
+
+// The simplifier with fixed step counts (simplify(maxTime) would depend on the clock): reduceVertices
+// drops redundant vertices, shortcutPath connects random points of non-adjacent segments (each
+// shortcut checked by the space information's motion validator), reduceVertices removes what is left.
+void simplify(og::PathGeometric& path, const ob::SpaceInformationPtr& si, int steps);
 
 }  // namespace csp::planners::ompl_bridge::detail

@@ -1,6 +1,5 @@
 // plan_transfer: a collision-free joint-space path between two rest poses (docs/planning-transfers.md).
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
-#include <ompl/geometric/PathSimplifier.h>
 #include <ompl/geometric/SimpleSetup.h>
 
 #include "ompl_common.hpp"
@@ -29,37 +28,11 @@ Result plan_transfer(const Request& request, const Callbacks& callbacks) {
   setup.setup();   // the ompl#601 path: the default projection's random matrix (JacobiSVD)
 
   Result result;
-  result.planner = setup.getPlanner()->getName();
-  IterationBudget budget(request.max_iterations);
-  const ob::PlannerStatus status = setup.solve(budget.condition());
-  result.iterations = budget.used();
-  result.cap_hit = budget.exhausted();
-  // The solution path is the problem definition's own copy. OMPL 1.5.2's LazyPRM frees its roadmap
-  // only in clear() (its destructor leaks it; fixed upstream by ompl/ompl#909).
-  setup.getPlanner()->clear();
+  if (!solve_within_budget(setup, request, "path found", result, started)) return result;
 
-  if (status != ob::PlannerStatus::EXACT_SOLUTION) {
-    if (status == ob::PlannerStatus::APPROXIMATE_SOLUTION) {
-      result.best_attempt = waypoints(setup.getSolutionPath());
-      result.best_distance = setup.getProblemDefinition()->getSolutionDifference();
-    }
-    result.message = "no path found within " + std::to_string(request.max_iterations) + " iterations of " +
-                     result.planner + " (OMPL: " + status.asString() + ")";
-    result.seconds = seconds_since(started);
-    return result;
-  }
-
-  // Fixed step counts (simplify(maxTime) would depend on the clock). Each shortcut is checked by the
-  // certified motion validator; reduceVertices first drops redundant vertices, shortcutPath then
-  // connects random points of non-adjacent segments, reduceVertices again removes what that leaves.
+  // Each shortcut is checked by the certified motion validator.
   og::PathGeometric& path = setup.getSolutionPath();
-  if (request.simplify_steps > 0) {
-    og::PathSimplifier simplifier(si);
-    const auto steps = static_cast<unsigned int>(request.simplify_steps);
-    simplifier.reduceVertices(path, steps, steps / 2);
-    simplifier.shortcutPath(path, steps, steps / 2);
-    simplifier.reduceVertices(path, steps, steps / 2);
-  }
+  simplify(path, si, request.simplify_steps);
   std::vector<Joints> found = waypoints(path);
   result.seconds = seconds_since(started);
   if (!path_is_free(found, callbacks)) {
