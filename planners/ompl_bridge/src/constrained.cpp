@@ -2,6 +2,7 @@
 // OMPL's projection-based constrained planning (Kingston, Moll & Kavraki, IJRR 2019): states are
 // sampled in R^7 and projected onto the manifold by Newton steps with the Jacobian; motions are
 // geodesics of `delta`-long steps, each projected and checked.
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -99,16 +100,10 @@ Result plan_on_manifold(const Request& request, const Callbacks& callbacks, cons
   path.interpolate();
   std::vector<Joints> found = waypoints(path);
   result.seconds = seconds_since(started);
-  for (const Joints& q : found) {
-    if (!callbacks.is_valid(q) || !(residual(constraint, q) <= constraint.tolerance)) {
-      result.best_attempt = std::move(found);
-      result.message = "the path " + result.planner + " returned failed the final check (a state invalid or off the manifold)";
-      return result;
-    }
-  }
-  result.solved = true;
-  result.waypoints = std::move(found);
-  return result;
+  const bool passed = std::all_of(found.begin(), found.end(), [&](const Joints& q) {
+    return callbacks.is_valid(q) && residual(constraint, q) <= constraint.tolerance;
+  });
+  return finish(std::move(result), std::move(found), passed, "a state invalid or off the manifold");
 }
 
 }  // namespace csp::planners::ompl_bridge

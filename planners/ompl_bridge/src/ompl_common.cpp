@@ -252,5 +252,16 @@ void simplify(og::PathGeometric& path, const ob::SpaceInformationPtr& si, int st
   simplifier.reduceVertices(path, n, n / 2);
 }
 
+Result finish(Result result, std::vector<Joints> path, bool passed, const std::string& failure) {
+  if (passed) {
+    result.solved = true;
+    result.waypoints = std::move(path);
+  } else {
+    result.best_attempt = std::move(path);
+    result.message = "the path " + result.planner + " returned failed the final check (" + failure + ")";
+  }
+  return result;
+}
+
 }  // namespace detail
 }  // namespace csp::planners::ompl_bridge

@@ -103,4 +103,8 @@ bool solve_within_budget(og::SimpleSetup& setup, const Request& request, const s
 // shortcut checked by the space information's motion validator), reduceVertices removes what is left.
 void simplify(og::PathGeometric& path, const ob::SpaceInformationPtr& si, int steps);
 
+// The end of a plan: the path is the solution if it passed its final check, else the best attempt
+// with a message saying why (`failure`).
+Result finish(Result result, std::vector<Joints> path, bool passed, const std::string& failure);
+
 }  // namespace csp::planners::ompl_bridge::detail

@@ -35,14 +35,8 @@ Result plan_transfer(const Request& request, const Callbacks& callbacks) {
   simplify(path, si, request.simplify_steps);
   std::vector<Joints> found = waypoints(path);
   result.seconds = seconds_since(started);
-  if (!path_is_free(found, callbacks)) {
-    result.best_attempt = std::move(found);
-    result.message = "the path " + result.planner + " returned failed the final check (a vertex or segment in collision)";
-    return result;
-  }
-  result.solved = true;
-  result.waypoints = std::move(found);
-  return result;
+  const bool passed = path_is_free(found, callbacks);
+  return finish(std::move(result), std::move(found), passed, "a vertex or segment in collision");
 }
 
 }  // namespace csp::planners::ompl_bridge
