@@ -179,6 +179,33 @@ TEST(GapBlind, LocalisesWhatNoLibraryEffectExplains) {
   localises_what_no_library_effect_explains(generate_log, kOutsideSeeds);
 }
 
+// A push on one joint for 0.8 s in the held-out log (on the dynamics core, fast enough to run
+// sanitized): the cause injected is still named alone, and the push is localised as a transient on
+// its joint, starting at most two stretches (kTransientWindow) before it: the stretch it starts in,
+// and the one the transient is widened by.
+TEST(GapBlind, LocalisesATransientAndKeepsItOutOfTheSelection) {
+  const Model model = diagnosing_model();
+  const InjectedEffects truth = realistic_effect("joint_friction", model, 1);
+  const JointLog train = generate_log(model, truth, 101, 102, {});
+  JointLog heldout = generate_log(model, truth, 103, 104, {});
+  constexpr int kPushedJoint = 3;  // 0-based: joint 4
+  constexpr double kStart = 4.0, kEnd = 4.8, kPush = 2.0;  // [s], [s], [N m]
+  for (std::size_t k = 0; k < heldout.size(); ++k)
+    if (heldout.t[k] >= kStart && heldout.t[k] < kEnd) heldout.tau_J[k][kPushedJoint] += kPush;
+  const Diagnosis d = diagnose(model, train, heldout);
+  EXPECT_EQ(verdict(d), "joint_friction");
+  bool found = false;
+  for (const UnexplainedStructure& u : d.unexplained)
+    if (u.kind == "transient") {
+      found = true;
+      std::cout << u.detail << '\n';
+      EXPECT_EQ(u.joint, kPushedJoint + 1);
+      EXPECT_GE(u.value, kStart - 2 * kTransientWindow);
+      EXPECT_LE(u.value, kStart);
+    }
+  EXPECT_TRUE(found);
+}
+
 // The same checks on logs of the emulated robot: its torque loop, its sensor's noise, the
 // controller's tracking errors and the integrator between the effect and the log. The emulated
 // robot's logs cost as much to diagnose as the others: CTest runs one seed per effect, the first
