@@ -31,7 +31,6 @@ namespace {
 namespace fs = std::filesystem;
 using planners::PlanReport;
 using planners::PlanRequest;
-using planners::Scene;
 
 // A shipped robot (panda, fr3) or a robot file.
 std::string robot_file(const std::string& robot) {
@@ -66,7 +65,7 @@ planners::Armature robot_armature(const std::string& robot) {
 // The robot with the scene's tool as its end effector (mass and TCP) and its motors' armature: what
 // the plan is made for, and what its scenario's plant is.
 Model scene_model(const std::string& robot, const Scene& scene) {
-  ModelParameters parameters = planners::with_tool(model_parameters(load_robot_config(robot), {}), scene.tool);
+  ModelParameters parameters = with_tool(model_parameters(load_robot_config(robot), {}), scene.tool);
   parameters.armature = robot_armature(robot).values;
   return Model(parameters);
 }
@@ -80,7 +79,7 @@ struct CheckArguments {
 };
 
 int run_check(const CheckArguments& args) {
-  const Scene scene = planners::load_scene(scene_file(args.scene));
+  const Scene scene = load_scene(scene_file(args.scene));
   const std::string robot = robot_file(args.robot);
   const Model model = scene_model(robot, scene);
   if (!(args.power_limit > 0.0)) throw UsageError("--power-limit: expected a positive power [W]");
@@ -140,7 +139,7 @@ PlanContext load_context(const std::string& command, const PlanArguments& args, 
       continue;
     request.options.emplace_back(name, option->get_expected_min() == 0 ? "" : option->as<std::string>());
   }
-  Scene scene = planners::load_scene(scene_file(args.scene));
+  Scene scene = load_scene(scene_file(args.scene));
   const std::string robot = robot_file(args.robot);
   Model model = scene_model(robot, scene);
   return {request, std::move(scene), robot, std::move(model), args.out, args.verify};
@@ -253,8 +252,8 @@ struct TimedPath {
   JointLog log;
   nlohmann::json made;
 };
-std::optional<TimedPath> transfer(const PlanContext& c, planners::ClearanceChecker& checker, const planners::NamedPose& from,
-                                  const planners::NamedPose& to, const planners::TransferOptions& options,
+std::optional<TimedPath> transfer(const PlanContext& c, planners::ClearanceChecker& checker, const NamedPose& from,
+                                  const NamedPose& to, const planners::TransferOptions& options,
                                   std::string& problem, nlohmann::json& best) {
   const planners::TransferPlan plan =
       planners::plan_transfer(c.scene, checker, c.model.parameters().joint_limits, from, to, options);
@@ -377,11 +376,11 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
   transfer_options.max_iterations = args.transfer_iterations;
   Planned planned;
   nlohmann::json segments = nlohmann::json::array();
-  planners::NamedPose at = c.scene.pose(c.scene.start);
+  NamedPose at = c.scene.pose(c.scene.start);
   std::string problem;
   nlohmann::json best;
   for (int a = 0; a < args.anchors; ++a) {
-    const planners::NamedPose anchor{"anchor" + std::to_string(a + 1), task.anchors[static_cast<std::size_t>(a)]};
+    const NamedPose anchor{"anchor" + std::to_string(a + 1), task.anchors[static_cast<std::size_t>(a)]};
     const std::optional<TimedPath> there = transfer(c, checker, at, anchor, transfer_options, problem, best);
     if (!there) return no_plan(c, problem, best);
     append(planned.trajectory, there->log);

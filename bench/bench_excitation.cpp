@@ -44,8 +44,8 @@ std::vector<planners::JointSample> sweep(const Vector7& a, const Vector7& b) {
 
 struct Fixture {
   explicit Fixture(const Anchor& anchor)
-      : scene(planners::load_scene(std::string(CSP_SOURCE_DIR) + "/configs/scenes/" + anchor.scene + ".yaml")),
-        model(planners::with_tool(
+      : scene(load_scene(std::string(CSP_SOURCE_DIR) + "/configs/scenes/" + anchor.scene + ".yaml")),
+        model(with_tool(
             model_parameters(load_robot_config(std::string(CSP_SOURCE_DIR) + "/configs/robots/panda.yaml"), {}), scene.tool)),
         checker(std::make_shared<planners::ClearanceChecker>(model, scene)) {
     const Vector7 a = scene.pose(anchor.pose).q;
@@ -58,7 +58,7 @@ struct Fixture {
     auto c = checker;
     options.clearance = [c](const Vector7& q) { return c->check(q).clearance; };
   }
-  planners::Scene scene;
+  Scene scene;
   Model model;
   std::shared_ptr<planners::ClearanceChecker> checker;
   planners::ExcitationOptions options;

@@ -19,7 +19,7 @@ namespace {
 using namespace csp;
 
 // A seeded rest-to-rest excitation of 10 periods of 10 s around the scene's start pose.
-const JointLog& trajectory(const planners::Scene& scene, const Model& model) {
+const JointLog& trajectory(const Scene& scene, const Model& model) {
   static const JointLog log = [&] {
     std::mt19937 random(11);
     std::uniform_real_distribution<double> uniform(-1.0, 1.0);
@@ -32,7 +32,7 @@ const JointLog& trajectory(const planners::Scene& scene, const Model& model) {
 }
 
 void check(benchmark::State& state, bool broad_phase) {
-  const planners::Scene scene = bench::shipped_scene(0);
+  const Scene scene = bench::shipped_scene(0);
   const Model model = bench::panda_with_tool(scene);
   const JointLog& log = trajectory(scene, model);
   planners::CheckOptions options;
@@ -52,7 +52,7 @@ void BM_PlanCheck100sNaiveAllPairs(benchmark::State& state) { check(state, false
 
 // Both in one loop, alternating, so that the ratio is measured under the same machine load.
 void BM_PlanCheck100sRatioNaiveOverBroad(benchmark::State& state) {
-  const planners::Scene scene = bench::shipped_scene(0);
+  const Scene scene = bench::shipped_scene(0);
   const Model model = bench::panda_with_tool(scene);
   const JointLog& log = trajectory(scene, model);
   planners::CheckOptions broad, naive;

@@ -17,7 +17,7 @@ using namespace csp;
 
 template <bool kAnalytic>
 void BM_TaskPath(benchmark::State& state) {
-  const planners::Scene scene = bench::shipped_scene(static_cast<int>(state.range(0)));
+  const Scene scene = bench::shipped_scene(static_cast<int>(state.range(0)));
   const Model model = bench::panda_with_tool(scene);
   planners::TaskPathOptions options;
   options.analytic_jacobian = kAnalytic;

@@ -69,7 +69,7 @@ struct Fixture {
     return c;
   }
 
-  planners::Scene scene;
+  Scene scene;
   Model model;
   planners::ClearanceChecker checker;
   bridge::Request request;

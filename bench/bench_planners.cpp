@@ -31,7 +31,7 @@ struct Fixture {
       states.push_back(q);
     }
   }
-  planners::Scene scene;
+  Scene scene;
   Model model;
   planners::ClearanceChecker checker;
   std::vector<Vector7> states;

@@ -20,7 +20,7 @@
 #include "csp/planners/checker.hpp"
 #include "csp/planners/excitation.hpp"
 #include "csp/planners/identifiability.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 #include "support.hpp"
 
 namespace csp::test {
@@ -48,8 +48,8 @@ ModelOptions linear_friction() {
 // The ultrasound scene's arm: Panda with the probe (with_tool) and Gaz et al.'s linear friction
 // (pi_hat_CLS), the model class the identification fits.
 struct Setup {
-  planners::Scene scene = planners::load_scene(std::string(CSP_SOURCE_DIR) + "/configs/scenes/ultrasound_abdomen.yaml");
-  ModelParameters parameters = planners::with_tool(model_parameters(load_robot_config(robot_file("panda")), linear_friction()), scene.tool);
+  Scene scene = load_scene(std::string(CSP_SOURCE_DIR) + "/configs/scenes/ultrasound_abdomen.yaml");
+  ModelParameters parameters = with_tool(model_parameters(load_robot_config(robot_file("panda")), linear_friction()), scene.tool);
   Model model{parameters};
   Vector7 start = scene.pose("scan_start_hover").q, end = scene.pose("scan_end_hover").q;
   Vector7 anchor = 0.5 * (start + end);
@@ -200,7 +200,7 @@ TEST(Excitation, MarginJacobianMatchesCentralDifferences) {
   o.sharpness = 20.0;   // a smoother minimum, so that central differences resolve it
   // Gaz et al.'s sigmoid friction (smooth): the linear law's sign(dq) jump defeats central differences
   // wherever a joint passes through rest between x - h and x + h.
-  const Model model(planners::with_tool(model_parameters(load_robot_config(robot_file("panda")), {}), setup().scene.tool));
+  const Model model(with_tool(model_parameters(load_robot_config(robot_file("panda")), {}), setup().scene.tool));
   const ExcitationProblem problem(model, o);
   std::vector<double> x = problem.random_start(6);
   for (double& v : x) v *= 0.9;
@@ -333,7 +333,7 @@ TEST(Excitation, PlansAreWithinTheLimitsAt1kHzOnPandaAndFr3) {
   EXPECT_TRUE(within_limits_at_1khz(setup().model, solved(false).series));
   EXPECT_TRUE(within_limits_at_1khz(setup().model, solved(true).series));
   // FR3: velocity limits that shrink near the position limits; its ultrasound plan with a small budget.
-  const Model fr3(planners::with_tool(model_parameters(load_robot_config(robot_file("fr3")), {}), setup().scene.tool));
+  const Model fr3(with_tool(model_parameters(load_robot_config(robot_file("fr3")), {}), setup().scene.tool));
   ExcitationOptions o = options(true, false);
   o.max_evaluations = 10;
   const ExcitationResult result = ExcitationProblem(fr3, o).solve();

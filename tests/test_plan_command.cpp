@@ -30,7 +30,6 @@ namespace {
 
 using namespace csp::test;
 using planners::CheckFailure;
-using planners::Scene;
 using planners::TrajectoryCheck;
 
 constexpr double kDt = 0.001;
@@ -44,7 +43,7 @@ planners::Armature armature_of(const std::string& robot) {
 }
 
 Model scene_model(const std::string& robot, const Scene& scene) {
-  ModelParameters parameters = planners::with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool);
+  ModelParameters parameters = with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool);
   parameters.armature = armature_of(robot).values;
   return Model(parameters);
 }
@@ -120,7 +119,7 @@ void expect_alone(const TrajectoryCheck& check, const Planted& planted) {
 class PlantedViolations : public ::testing::Test {
  protected:
   void SetUp() override {
-    scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+    scene = load_scene(scene_file("ultrasound_abdomen"));
     model = std::make_unique<Model>(scene_model("panda", scene));
     limits = model->parameters().joint_limits;
     ready = scene.pose("ready").q;
@@ -283,7 +282,7 @@ TEST(PlanCheck, GazTrajectoryOneWithinThePandasLimitsAndFiguresRecomputed) {
     log.dq.push_back(v);
     log.tau_J.push_back(Vector7::Zero());
   }
-  const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", scene);
   const TrajectoryCheck check = planners::check_trajectory(log, model, scene);
   // Their velocity ramps end at t1 = 0.502 s with a step of acceleration (docs/planning.md): the
@@ -321,7 +320,7 @@ std::string read_text(const std::string& path) {
 ProgramRun run_csp(const std::vector<std::string>& args) { return run_program(CSP_EXECUTABLE, args); }
 
 TEST(PlanCommand, BrokenTrajectoryFilesAreRefusedWithLineAndColumn) {
-  const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   JointLog log = joint_move(scene.pose("ready").q, 3, 0.2, 0.1, 0.5, 1.0);
   const std::string jump = (temp_dir() / "jump.csv").string();
   log.q[500][3] += 0.1;   // line 502: a step of 0.1 rad in 1 ms (the limit allows 2.175 mrad)
@@ -353,7 +352,7 @@ TEST(PlanCommand, BrokenTrajectoryFilesAreRefusedWithLineAndColumn) {
 }
 
 TEST(PlanCommand, CheckReportsAFailingTrajectoryWithExitOneAndWritesTheReport) {
-  const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   const std::string file = (temp_dir() / "too_fast.csv").string();
   write_joint_log_csv(file, joint_move(scene.pose("ready").q, 6, -1.9, 0.5, 1.5, 2.5));
   const std::string out = (temp_dir() / "check_report").string();
@@ -383,7 +382,7 @@ JointLog small_excitation(const Model& model, const Vector7& anchor, double seco
 }
 
 TEST(ScenarioTrajectoryFile, TheEmulatorTracksTheFileAndHoldsItsEnd) {
-  const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", scene);
   const JointLog trajectory = small_excitation(model, scene.pose("ready").q, 4.0);
   const std::string dir = (temp_dir() / "scenario_file").string();
@@ -420,7 +419,7 @@ TEST(ScenarioTrajectoryFile, TheEmulatorTracksTheFileAndHoldsItsEnd) {
 }
 
 TEST(ScenarioTrajectoryFile, BadReferencesAreTheScenariosErrors) {
-  const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", scene);
   const std::string dir = (temp_dir() / "scenario_errors").string();
   planners::write_plan_files(dir, {"excite", "ultrasound_abdomen", "panda", 1, {}}, planners::versions("none"),
@@ -452,7 +451,7 @@ TEST(ScenarioTrajectoryFile, BadReferencesAreTheScenariosErrors) {
 
 // The written scenario runs under `csp emulate` as it is, on both robots, without a reflex.
 TEST(PlanFiles, TheWrittenScenarioRunsUnderCspEmulateOnPandaAndFr3) {
-  const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   for (const std::string robot : {"panda", "fr3"}) {
     const Model model = scene_model(robot, scene);
     const std::string dir = (temp_dir() / ("emulate_" + robot)).string();
@@ -466,7 +465,7 @@ TEST(PlanFiles, TheWrittenScenarioRunsUnderCspEmulateOnPandaAndFr3) {
 }
 
 TEST(PlanFiles, PlanYamlRecordsTheRequestAndReadsBack) {
-  const Scene scene = planners::load_scene(scene_file("mis_rcm"));
+  const Scene scene = load_scene(scene_file("mis_rcm"));
   const Model model = scene_model("fr3", scene);
   const std::string dir = (temp_dir() / "plan_yaml").string();
   const planners::PlanRequest request{"excite", "mis_rcm", "fr3", 42, {{"harmonics", "5"}, {"criterion", "task"}}};
@@ -553,7 +552,7 @@ TEST(PlanCommand, VerifyFiguresAgreeWithTheEmulatorsLogOnPandaAndFr3) {
     EXPECT_NE(emulate.out.find("finished without reflex"), std::string::npos);
     const JointLog measured = read_joint_log_csv(log_path);
     const JointLog planned = read_joint_log_csv(out + "/trajectory.csv");
-    const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+    const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
     const Model model = scene_model(robot, scene);
     planners::ClearanceChecker naive(model, scene);
     Vector7 worst = Vector7::Zero(), peak_tau = Vector7::Zero();

@@ -14,7 +14,7 @@
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/planners/checker.hpp"
 #include "csp/planners/ik.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 #include "csp/planners/task.hpp"
 #include "kdl_peer.hpp"
 #include "support.hpp"
@@ -23,7 +23,6 @@ namespace csp::test {
 namespace {
 
 using planners::ClearanceChecker;
-using planners::Scene;
 using planners::TaskConstraint;
 
 const std::vector<std::string> kScenes = {"ultrasound_abdomen", "doppler_femoral", "mis_rcm", "craniotomy"};
@@ -31,7 +30,7 @@ const std::vector<std::string> kScenes = {"ultrasound_abdomen", "doppler_femoral
 std::string scene_file(const std::string& name) { return std::string(CSP_SOURCE_DIR) + "/configs/scenes/" + name + ".yaml"; }
 
 Model scene_model(const std::string& robot, const Scene& scene) {
-  return Model(planners::with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool));
+  return Model(with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool));
 }
 
 // ---------------- Constraint Jacobians vs central differences ----------------
@@ -59,10 +58,10 @@ TEST(TaskConstraint, AnalyticJacobianMatchesCentralDifferences) {
   std::normal_distribution<double> noise(0.0, 0.3);
   for (const auto& name : kScenes) {
     SCOPED_TRACE(name);
-    const Scene scene = planners::load_scene(scene_file(name));
+    const Scene scene = load_scene(scene_file(name));
     const Model model = scene_model("panda", scene);
     TaskConstraint task(model, scene);
-    EXPECT_EQ(task.codim(), std::holds_alternative<planners::RcmPivot>(scene.task) ? 2 : 4);
+    EXPECT_EQ(task.codim(), std::holds_alternative<RcmPivot>(scene.task) ? 2 : 4);
     for (int trial = 0; trial < 50; ++trial) {
       // Around the scene's poses (near the task, where the skin normal's cylinder part applies) and far from it.
       Vector7 q = scene.poses[trial % scene.poses.size()].q;
@@ -73,7 +72,7 @@ TEST(TaskConstraint, AnalyticJacobianMatchesCentralDifferences) {
 }
 
 TEST(Ik, TcpTargetRowsJacobianMatchesCentralDifferences) {
-  const Scene scene = planners::load_scene(scene_file("craniotomy"));
+  const Scene scene = load_scene(scene_file("craniotomy"));
   const Model model = scene_model("fr3", scene);
   const auto rows = planners::tcp_target_rows(model, Vector3(0.4, 0.1, 0.3), Vector3(0.0, 0.6, -0.8));
   std::mt19937 rng(3);
@@ -100,7 +99,7 @@ TEST(TaskStates, StartEndAndAnchorsHitTheirTargetsByKdlAndKeepTheScenesBranch) {
   for (const std::string& robot : kStateRobots)
     for (const auto& name : kScenes) {
       SCOPED_TRACE(robot + " " + name);
-      const Scene scene = planners::load_scene(scene_file(name));
+      const Scene scene = load_scene(scene_file(name));
       const Model model = scene_model(robot, scene);
       TaskConstraint task(model, scene);
       ClearanceChecker contact(model, planners::contact_scene(scene, task.contact_obstacle()));
@@ -140,7 +139,7 @@ TEST(TaskStates, AnchorsMatchTheScenesNamedHoverPoses) {
                         Case{"doppler_femoral", "scan_start_hover", true}, Case{"doppler_femoral", "scan_end_hover", false},
                         Case{"craniotomy", "burr_hover", true}}) {
     SCOPED_TRACE(c.scene + " " + c.pose);
-    const Scene scene = planners::load_scene(scene_file(c.scene));
+    const Scene scene = load_scene(scene_file(c.scene));
     const Model model = scene_model("panda", scene);
     TaskConstraint task(model, scene);
     ClearanceChecker contact(model, planners::contact_scene(scene, task.contact_obstacle()));
@@ -184,7 +183,7 @@ TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
   for (const std::string robot : {"panda", "fr3"})
     for (const auto& name : kPathScenes) {
       SCOPED_TRACE(robot + " " + name);
-      const Scene scene = planners::load_scene(scene_file(name));
+      const Scene scene = load_scene(scene_file(name));
       const Model model = scene_model(robot, scene);
       const planners::TaskPathOptions options;
       const planners::TaskPath path = planners::plan_task_path(scene, model, options);
@@ -236,7 +235,7 @@ TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
         const Vector3 p = T.translation, z = T.rotation.col(2);
         peak_speed = std::max(peak_speed, (p - previous).norm() / 1e-3);
         previous = p;
-        if (const auto* scan = std::get_if<planners::UltrasoundScan>(&scene.task)) {
+        if (const auto* scan = std::get_if<UltrasoundScan>(&scene.task)) {
           const auto& skin = std::get<Capsule>(std::find_if(scene.obstacles.begin(), scene.obstacles.end(), [&](const auto& o) {
                                                  return o.name == task.contact_obstacle();
                                                })->shape);
@@ -245,13 +244,13 @@ TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
           const Vector3 off_line = (p - scan->start) - (p - scan->start).dot(line) * line;
           worst_position = std::max({worst_position, std::abs(sp.distance), off_line.norm()});
           worst_angle = std::max(worst_angle, angle(z, sp.inward));
-        } else if (const auto* rcm = std::get_if<planners::RcmPivot>(&scene.task)) {
+        } else if (const auto* rcm = std::get_if<RcmPivot>(&scene.task)) {
           worst_position = std::max(worst_position, (rcm->trocar - p).cross(z).norm());
           const double insertion = z.dot(p - rcm->trocar);
           EXPECT_TRUE(insertion >= rcm->insertion_min - 1e-9 && insertion <= rcm->insertion_max + 1e-9) << insertion;
           EXPECT_LE(angle(z, -Vector3::UnitZ()), rcm->max_pivot + 1e-9);
         } else {
-          const auto& burr = std::get<planners::BurrHole>(scene.task);
+          const auto& burr = std::get<BurrHole>(scene.task);
           worst_position = std::max(worst_position, (p - burr.entry).cross(burr.axis).norm());
           worst_angle = std::max(worst_angle, angle(z, -burr.axis));
         }
@@ -276,10 +275,10 @@ TEST(TaskPath, OnTheManifoldWithinLimitsAndCollisionFreeAt1kHz) {
 
       // Timed along the task: the scan at its speed; the drill ends advanced by `advance` past its standoff.
       const Transform end = kdl_tcp(kdl, log.q.back());
-      if (const auto* scan = std::get_if<planners::UltrasoundScan>(&scene.task)) {
+      if (const auto* scan = std::get_if<UltrasoundScan>(&scene.task)) {
         EXPECT_NEAR(peak_speed, scan->speed, 1e-3 * scan->speed);
         EXPECT_LT((end.translation - scan->end).norm(), 1e-4);
-      } else if (const auto* burr = std::get_if<planners::BurrHole>(&scene.task)) {
+      } else if (const auto* burr = std::get_if<BurrHole>(&scene.task)) {
         EXPECT_NEAR(burr->axis.dot(end.translation - burr->entry), burr->standoff - burr->advance, 1e-6);
       }
     }
@@ -290,7 +289,7 @@ TEST(TaskPath, SameSeedSamePath) {
 #ifdef CSP_TASK_TESTS_REDUCED
   GTEST_SKIP() << "sanitized build: determinism is checked in the Release build";
 #endif
-  const Scene scene = planners::load_scene(scene_file("mis_rcm"));
+  const Scene scene = load_scene(scene_file("mis_rcm"));
   const Model model = scene_model("panda", scene);
   planners::TaskPathOptions options;
   options.seed = 7;
@@ -303,8 +302,8 @@ TEST(TaskPath, SameSeedSamePath) {
 
 // A scan line that leaves the skin: one error naming the scene and the point.
 TEST(TaskConstraint, ScanOffTheSkinNamesTheSceneAndThePoint) {
-  Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
-  std::get<planners::UltrasoundScan>(scene.task).end.z() += 0.01;
+  Scene scene = load_scene(scene_file("ultrasound_abdomen"));
+  std::get<UltrasoundScan>(scene.task).end.z() += 0.01;
   const Model model = scene_model("panda", scene);
   try {
     TaskConstraint task(model, scene);
@@ -319,7 +318,7 @@ TEST(TaskConstraint, ScanOffTheSkinNamesTheSceneAndThePoint) {
 // The rcm anchor of the vertical shaft (pivot 0 at mid insertion, by IK from the named pose) lands on
 // the scene's port_hover: tip 0.10 above the port, shaft along -z, same branch.
 TEST(TaskStates, RcmAnchorOfTheVerticalShaftMatchesPortHover) {
-  const Scene scene = planners::load_scene(scene_file("mis_rcm"));
+  const Scene scene = load_scene(scene_file("mis_rcm"));
   const Model model = scene_model("panda", scene);
   TaskConstraint task(model, scene);
   ClearanceChecker plain(model, scene);
@@ -340,8 +339,8 @@ TEST(TaskStates, RcmAnchorOfTheVerticalShaftMatchesPortHover) {
 
 // A trocar moved (with the patient) out of the arm's reach: one error naming the scene and the state.
 TEST(TaskStates, UnreachableTrocarNamesTheSceneAndTheState) {
-  Scene scene = planners::load_scene(scene_file("mis_rcm"));
-  auto& rcm = std::get<planners::RcmPivot>(scene.task);
+  Scene scene = load_scene(scene_file("mis_rcm"));
+  auto& rcm = std::get<RcmPivot>(scene.task);
   const Vector3 shift(0.0, 1.5, 0.0);
   rcm.trocar += shift;
   for (auto& o : scene.obstacles)

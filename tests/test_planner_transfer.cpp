@@ -22,7 +22,7 @@
 #include "csp/planners/checker.hpp"
 #include "csp/planners/ompl_bridge.hpp"
 #include "csp/planners/profile.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 #include "csp/planners/transfer.hpp"
 #include "support.hpp"
 
@@ -30,8 +30,6 @@ namespace csp::test {
 namespace {
 
 using planners::ClearanceChecker;
-using planners::NamedPose;
-using planners::Scene;
 using planners::TransferOptions;
 using planners::TransferPlan;
 namespace ompl_bridge = planners::ompl_bridge;
@@ -51,7 +49,7 @@ const std::vector<std::string> kRobots = {"panda", "fr3"};
 std::string scene_file(const std::string& name) { return std::string(CSP_SOURCE_DIR) + "/configs/scenes/" + name + ".yaml"; }
 
 Model scene_model(const std::string& robot, const Scene& scene) {
-  return Model(planners::with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool));
+  return Model(with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool));
 }
 
 // ---------------- Septic segments ----------------
@@ -191,7 +189,7 @@ TEST(Transfer, EveryShippedTransferIsFreeAndWithinLimitsAt1kHz) {
   int transfers = 0;
   for (const auto& robot : kRobots)
     for (const auto& name : kScenes) {
-      const Scene scene = planners::load_scene(scene_file(name));
+      const Scene scene = load_scene(scene_file(name));
       const Model model = scene_model(robot, scene);
       ClearanceChecker checker(model, scene);
       for (const auto& from : scene.poses)
@@ -279,7 +277,7 @@ double lowest_clearance_along(const std::vector<Vector7>& path, ClearanceChecker
 }
 
 TEST(Transfer, RandomBoxScenesNeverGetAnInvalidPlan) {
-  const Scene base = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene base = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", base);
   std::mt19937_64 engine(2026);
   int found = 0, detours = 0, not_found = 0;
@@ -337,7 +335,7 @@ DetourProblem detour_problem(const Scene& base, const Model& model) {
 
 // The waypoints of the detour problem planned with `seed`, every double in hexadecimal (exact).
 std::string detour_plan_text(std::uint64_t seed) {
-  const Scene base = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene base = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", base);
   DetourProblem p = detour_problem(base, model);
   TransferOptions options;
@@ -394,7 +392,7 @@ std::string transfer_error(const Scene& scene, ClearanceChecker& checker, const 
 }
 
 TEST(Transfer, StartInCollisionNamesThePair) {
-  Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", scene);
   // A ball where the ready pose's elbow (joint 4's frame) is.
   Data data;
@@ -413,7 +411,7 @@ TEST(Transfer, StartInCollisionNamesThePair) {
 }
 
 TEST(Transfer, BadRequestsGetOneClearError) {
-  const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("fr3", scene);
   ClearanceChecker checker(model, scene);
   const NamedPose ready = scene.pose("ready"), hover = scene.pose("scan_start_hover");
@@ -441,7 +439,7 @@ TEST(Transfer, BadRequestsGetOneClearError) {
 }
 
 TEST(Transfer, NothingFoundInTheBudgetSaysSoWithTheBestAttempt) {
-  const Scene base = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene base = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", base);
   DetourProblem p = detour_problem(base, model);
   TransferOptions options;

@@ -16,7 +16,7 @@
 #include "csp/io/yaml_field.hpp"
 #include "csp/planners/checker.hpp"
 #include "csp/planners/fourier.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 #include "kdl_peer.hpp"
 #include "support.hpp"
 
@@ -25,7 +25,6 @@ namespace {
 
 using planners::ClearanceChecker;
 using planners::FourierSeries;
-using planners::Scene;
 
 const std::vector<std::string> kScenes = {"ultrasound_abdomen", "doppler_femoral", "mis_rcm", "craniotomy"};
 
@@ -400,14 +399,14 @@ TEST(Fourier, TrajectoryIsAJointLogWithTheTorqueItNeeds) {
 // ---------------- Scenes ----------------
 
 Model scene_model(const std::string& robot, const Scene& scene) {
-  return Model(planners::with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool));
+  return Model(with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool));
 }
 
 TEST(Scenes, EveryShippedSceneLoadsAndItsPosesAreCollisionFreeWithinLimits) {
   for (const std::string robot : {"panda", "fr3"})
     for (const auto& name : kScenes) {
       SCOPED_TRACE(robot + " " + name);
-      const Scene scene = planners::load_scene(scene_file(name));
+      const Scene scene = load_scene(scene_file(name));
       EXPECT_EQ(scene.name, name);
       const Model model = scene_model(robot, scene);
       ClearanceChecker checker(model, scene);
@@ -431,8 +430,8 @@ TEST(Scenes, HoverPosesPlaceTheToolWhereTheTaskSays) {
     return data.O_T_EE;
   };
   for (const std::string name : {"ultrasound_abdomen", "doppler_femoral"}) {
-    const Scene scene = planners::load_scene(scene_file(name));
-    const auto& scan = std::get<planners::UltrasoundScan>(scene.task);
+    const Scene scene = load_scene(scene_file(name));
+    const auto& scan = std::get<UltrasoundScan>(scene.task);
     for (const auto& [pose, point] : {std::pair{"scan_start_hover", scan.start}, std::pair{"scan_end_hover", scan.end}}) {
       const Transform T = tcp(scene, pose);
       EXPECT_TRUE(near(T.translation, point - scan.hover * scan.tool_axis, 1e-6)) << name << " " << pose;
@@ -440,15 +439,15 @@ TEST(Scenes, HoverPosesPlaceTheToolWhereTheTaskSays) {
     }
   }
   {
-    const Scene scene = planners::load_scene(scene_file("mis_rcm"));
-    const auto& rcm = std::get<planners::RcmPivot>(scene.task);
+    const Scene scene = load_scene(scene_file("mis_rcm"));
+    const auto& rcm = std::get<RcmPivot>(scene.task);
     const Transform T = tcp(scene, "port_hover");
     EXPECT_TRUE(near(T.translation, rcm.trocar + rcm.hover * Vector3::UnitZ(), 1e-6));
     EXPECT_TRUE(near(T.rotation.col(2), Vector3(-Vector3::UnitZ()), 1e-6));
   }
   {
-    const Scene scene = planners::load_scene(scene_file("craniotomy"));
-    const auto& burr = std::get<planners::BurrHole>(scene.task);
+    const Scene scene = load_scene(scene_file("craniotomy"));
+    const auto& burr = std::get<BurrHole>(scene.task);
     const Transform T = tcp(scene, "burr_hover");
     EXPECT_TRUE(near(T.translation, burr.entry + 0.06 * burr.axis, 1e-6));
     EXPECT_TRUE(near(T.rotation.col(2), Vector3(-burr.axis), 1e-6));
@@ -462,7 +461,7 @@ TEST(Scenes, HoverPosesPlaceTheToolWhereTheTaskSays) {
 
 TEST(Scenes, BroadPhaseFindsTheSamePairAsAllPairs) {
   for (const auto& name : kScenes) {
-    const Scene scene = planners::load_scene(scene_file(name));
+    const Scene scene = load_scene(scene_file(name));
     const Model model = scene_model("panda", scene);
     ClearanceChecker checker(model, scene);
     RandomStates random(41);
@@ -478,7 +477,7 @@ TEST(Scenes, BroadPhaseFindsTheSamePairAsAllPairs) {
 }
 
 TEST(Scenes, DetectsObstacleAndSelfCollisions) {
-  const Scene scene = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", scene);
   ClearanceChecker checker(model, scene);
   // Shoulder bent forward and down: the arm sweeps through the table and the patient.
@@ -498,7 +497,7 @@ std::string load_error(const std::string& text, const std::string& name) {
   const std::string path = (temp_dir() / (name + ".yaml")).string();
   std::ofstream(path) << text;
   try {
-    planners::load_scene(path);
+    load_scene(path);
   } catch (const ConfigError& e) {
     return e.what();
   }
@@ -541,7 +540,7 @@ TEST(Scenes, InvalidScenesGetOneErrorNamingFileKeyAndExpectation) {
   }
   EXPECT_NE(load_error("name: [unclosed", "bad_yaml").find("bad_yaml.yaml: not valid YAML"), std::string::npos);
   try {
-    planners::load_scene("/nonexistent/scene.yaml");
+    load_scene("/nonexistent/scene.yaml");
     ADD_FAILURE() << "no error";
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.yaml: cannot open the scene file"), std::string::npos);
@@ -551,7 +550,7 @@ TEST(Scenes, InvalidScenesGetOneErrorNamingFileKeyAndExpectation) {
 // ---------------- Certified motion check ----------------
 
 TEST(MotionCheck, NeverCertifiesAMotionThatDenseResamplingFindsInCollision) {
-  const Scene base = planners::load_scene(scene_file("ultrasound_abdomen"));
+  const Scene base = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", base);
   RandomShapes shapes(51);
   RandomStates random(52);

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "csp/dynamics/geometry.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 
 namespace csp::planners {
 

@@ -20,7 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "csp/io/joint_log.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 
 namespace csp::planners {
 

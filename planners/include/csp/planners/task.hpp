@@ -22,7 +22,7 @@
 #include "csp/io/joint_log.hpp"
 #include "csp/planners/checker.hpp"
 #include "csp/planners/ik.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 
 namespace csp::planners {
 

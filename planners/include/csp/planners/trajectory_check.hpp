@@ -19,7 +19,7 @@
 
 #include "csp/dynamics/model.hpp"
 #include "csp/io/joint_log.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 
 namespace csp::planners {
 

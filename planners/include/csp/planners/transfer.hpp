@@ -9,7 +9,7 @@
 
 #include "csp/dynamics/limits.hpp"
 #include "csp/planners/checker.hpp"
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 
 namespace csp::planners {
 

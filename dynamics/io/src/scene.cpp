@@ -1,4 +1,4 @@
-#include "csp/planners/scene.hpp"
+#include "csp/io/scene.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "csp/io/yaml_field.hpp"
 
-namespace csp::planners {
+namespace csp {
 namespace {
 
 // Every block that carries numbers names where they come from (or says `assumption: ...`).
@@ -209,4 +209,4 @@ ModelParameters with_tool(ModelParameters parameters, const Tool& tool) {
   return parameters;
 }
 
-}  // namespace csp::planners
+}  // namespace csp

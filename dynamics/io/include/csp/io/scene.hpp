@@ -12,7 +12,7 @@
 #include "csp/dynamics/geometry.hpp"
 #include "csp/dynamics/model.hpp"
 
-namespace csp::planners {
+namespace csp {
 
 using Shape = std::variant<Box, Capsule, Sphere, HalfSpace>;
 
@@ -84,4 +84,4 @@ Scene load_scene(const std::string& path);
 // The robot's parameters with the scene's tool as its end effector (mass, TCP).
 ModelParameters with_tool(ModelParameters parameters, const Tool& tool);
 
-}  // namespace csp::planners
+}  // namespace csp
