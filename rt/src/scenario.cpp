@@ -175,6 +175,27 @@ ExternalWrench read_wrench(const Field& f) {
   return w;
 }
 
+// scene: a scene file (configs/scenes, relative to this scenario) whose tool the arm carries and
+// whose obstacles it touches (docs/contact.md); contact: the options of the contact engine.
+void read_scene(const Field& top, EmulatorSettings& s) {
+  if (top.has("end_effector") && top["end_effector"].text() != "none")
+    top["end_effector"].fail("none (or no end_effector) with a `scene`: the scene's tool is the end effector");
+  const std::filesystem::path file = top["scene"].text();
+  const std::string path = (file.is_absolute() ? file : std::filesystem::path(top.file()).parent_path() / file).string();
+  if (!std::filesystem::is_regular_file(path))
+    top["scene"].fail("the path of a scene file, relative to this scenario (`" + path + "` is not a readable file)");
+  auto scene = std::make_shared<Scene>(load_scene(path));
+  s.plant = with_tool(s.plant, scene->tool);
+  s.internal = with_tool(s.internal, scene->tool);
+  if (top.has("contact")) {
+    const Field c = top["contact"];
+    c.allow_only({"friction_velocity", "max_substeps"});
+    if (c.has("friction_velocity")) s.contact.friction_velocity = positive(c["friction_velocity"]);
+    if (c.has("max_substeps")) s.contact.max_substeps = static_cast<int>(c["max_substeps"].whole_number(1, 1000));
+  }
+  s.scene = std::move(scene);
+}
+
 }  // namespace
 
 void quintic_ramp(double t, double duration, double& r, double& dr, double& ddr) {
@@ -234,7 +255,7 @@ Scenario load_scenario(const std::string& path) {
   const Field top(root, path, "");
   top.allow_only({"name", "robot", "end_effector", "joint_limits", "plant", "robot_model", "initial_q", "duration",
                   "clock", "seed", "robot_settings", "controller", "faults", "external_wrenches",
-                  "hand", "vacuum_gripper"});
+                  "hand", "vacuum_gripper", "scene", "contact"});
   Scenario s;
   s.path = path;
   s.name = top["name"].text();
@@ -273,6 +294,9 @@ Scenario load_scenario(const std::string& path) {
   } else {
     s.emulator.internal = build_model(config, internal_options, top);
   }
+
+  if (top.has("scene")) read_scene(top, s.emulator);
+  else if (top.has("contact")) top["contact"].fail("no contact options without a `scene` to touch");
 
   s.emulator.q_initial = top["initial_q"].vector<7>();
   const JointLimits& limits = s.emulator.plant.joint_limits;
