@@ -7,6 +7,7 @@
 #include <fstream>
 #include <memory>
 
+#include "contact_support.hpp"
 #include "csp/dynamics/contact.hpp"
 #include "csp/io/scene.hpp"
 #include "csp/rt/scenario.hpp"
@@ -23,10 +24,7 @@ const Vector7 kReady = (Vector7() << 0.0, -M_PI / 4, 0.0, -3 * M_PI / 4, 0.0, M_
 
 std::string scene_path(const std::string& name) { return std::string(CSP_SOURCE_DIR) + "/configs/scenes/" + name + ".yaml"; }
 
-const Scene& ultrasound_scene() {
-  static const Scene scene = load_scene(scene_path("ultrasound_abdomen"));
-  return scene;
-}
+const Scene& ultrasound_scene() { return *shipped_ultrasound_scene(); }
 
 const Material& shipped(const std::string& name) { return ultrasound_scene().materials.at(name); }
 
@@ -150,12 +148,7 @@ rt::EmulatorSettings probe_settings(bool gravity = true) {
   s.plant = with_tool(model_parameters(load_robot_config(robot_file("panda")), o), ultrasound_scene().tool);
   s.internal = s.plant;
   s.q_initial = kReady;
-  // libfranka's force_control example raises every threshold to 100 before it presses.
-  rt::CollisionBehavior& c = s.collision;
-  for (Vector7* v : {&c.lower_torque_acceleration, &c.upper_torque_acceleration, &c.lower_torque_nominal, &c.upper_torque_nominal})
-    v->setConstant(100.0);
-  for (Vector6* v : {&c.lower_force_acceleration, &c.upper_force_acceleration, &c.lower_force_nominal, &c.upper_force_nominal})
-    v->setConstant(100.0);
+  raise_collision_thresholds(s.collision);
   return s;
 }
 
@@ -185,13 +178,9 @@ Matrix6x7 tcp_jacobian(const Model& model, const Vector7& q) {
   return J;
 }
 
-// Torque that makes the TCP push with `force` (what the robot exerts on its environment), with
-// joint damping: at rest, the TCP's wrench is exactly `force`.
 Vector7 pushing_torque(const Emulator& emulator, const Vector3& force) {
-  const Vector7 q = q_of(emulator.state()), dq = dq_of(emulator.state());
-  Vector6 wrench = Vector6::Zero();
-  wrench.head<3>() = force;
-  return tcp_jacobian(emulator.internal_model(), q).transpose() * wrench - 5.0 * dq;
+  Data data;
+  return pressing_torque(emulator.internal_model(), data, emulator.state(), force);
 }
 
 // Pushes with `force`, ramped in over the motion's first 0.5 s (libfranka's torque-rate limit).

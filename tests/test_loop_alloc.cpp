@@ -8,6 +8,7 @@
 #include <new>
 #include <vector>
 
+#include "contact_support.hpp"
 #include "csp/rt/controllers.hpp"
 #include "csp/rt/scenario.hpp"
 
@@ -150,6 +151,27 @@ TEST(LoopAllocation, EmulatorStepAllocatesNothing) {
   emulator.step(&command);
   ASSERT_FALSE(emulator.in_motion());
   for (int k = 0; k < 1'000; ++k) emulator.step(nullptr);   // idle
+  EXPECT_EQ(allocations.load() - before, 0u);
+}
+
+// In contact with a scene (the probe pressing on the breathing abdomen: the contact query, the
+// forces and the adaptive substeps run every substep).
+TEST(LoopAllocation, EmulatorStepInContactAllocatesNothing) {
+  rt::Emulator emulator(test::ultrasound_settings(default_scenario().emulator, true));
+  test::PressingController controller(emulator.internal_model(), Vector3(0, 0, -10.0));
+  emulator.start_motion(rt::ControlMode::kTorque);
+  for (int k = 0; k < 2'000; ++k) {
+    const rt::Command command = controller(emulator.state());
+    emulator.step(&command);
+  }
+  ASSERT_GT(emulator.contact().active_contacts, 0);
+  const uint64_t before = allocations.load();
+  for (int k = 0; k < 5'000; ++k) {
+    const rt::Command command = controller(emulator.state());
+    emulator.step(&command);
+  }
+  ASSERT_TRUE(emulator.in_motion()) << emulator.reflex_reason();
+  EXPECT_GT(emulator.contact().active_contacts, 0);
   EXPECT_EQ(allocations.load() - before, 0u);
 }
 

@@ -205,7 +205,7 @@ Scene load_scene(const std::string& path) {
     const Field o = obstacles[i];
     o.allow_only({"name", "class", "source", "box", "capsule", "sphere", "half_space", "exempt", "material", "motion"});
     require_source(o);
-    Obstacle obstacle{o["name"].text(), o["class"].text(), shape(o), {}, {}, {}};
+    Obstacle obstacle{o["name"].text(), o["class"].text(), shape(o), {}};
     if (!obstacle_names.insert(obstacle.name).second) o["name"].fail("a name not used by another obstacle");
     if (obstacle.obstacle_class == "self" || !scene.clearance.contains(obstacle.obstacle_class))
       o["class"].fail("an obstacle class with a clearance in `clearance`");

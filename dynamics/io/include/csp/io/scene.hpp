@@ -31,8 +31,9 @@ struct Obstacle {
   std::string obstacle_class;        // a key of Scene::clearance
   Shape shape;                       // base frame, at displacement 0
   std::vector<std::string> exempt;   // arm or tool capsules never checked against it (e.g. the cart under link 0)
-  std::string material;              // a key of Scene::materials; empty: no contact (a keep-out zone)
-  ObstacleMotion motion;             // none by default (the planner plans against `shape`)
+  // Defaulted (= {}) so that the planner's four-field initialisers stay warning-free.
+  std::string material = {};         // a key of Scene::materials; empty: no contact (a keep-out zone)
+  ObstacleMotion motion = {};        // none by default (the planner plans against `shape`)
 };
 
 struct NamedCapsule {
