@@ -18,8 +18,10 @@ rt::EmulatorSettings base_settings() {
 }
 
 // One item = one 1 kHz cycle (controller, step), after 2 s of pressing (in contact when `contact`).
-void run_pressing(benchmark::State& state, bool contact) {
-  rt::Emulator emulator(test::ultrasound_settings(base_settings(), contact));
+void run_pressing(benchmark::State& state, bool contact, double friction_velocity = rt::ContactOptions{}.friction_velocity) {
+  rt::EmulatorSettings settings = test::ultrasound_settings(base_settings(), contact);
+  settings.contact.friction_velocity = friction_velocity;
+  rt::Emulator emulator(settings);
   test::PressingController controller(emulator.internal_model(), Vector3(0, 0, contact ? -10.0 : 0.0));
   emulator.start_motion(rt::ControlMode::kTorque);
   for (int k = 0; k < 2000; ++k) {
@@ -27,7 +29,15 @@ void run_pressing(benchmark::State& state, bool contact) {
     emulator.step(&command);
   }
   if (contact && emulator.contact().active_contacts == 0) state.SkipWithError("the probe does not touch the abdomen");
+  // The probe creeps over the curved abdomen: every 5 s back to the pressing state of t = 2 s.
+  const rt::Emulator pressing = emulator;
+  int cycles = 0;
   for (auto _ : state) {
+    if (++cycles % 5000 == 0) {
+      state.PauseTiming();
+      emulator = pressing;
+      state.ResumeTiming();
+    }
     const rt::Command command = controller(emulator.state());
     emulator.step(&command);
   }
@@ -40,6 +50,8 @@ void run_pressing(benchmark::State& state, bool contact) {
 
 void BM_CycleInContact(benchmark::State& state) { run_pressing(state, true); }
 void BM_CycleWithoutScene(benchmark::State& state) { run_pressing(state, false); }
+// The friction's slope mu F_n / v_s sets the substeps while pressing (docs/contact.md): v_s = 1 cm/s.
+void BM_CycleInContact_FrictionVelocity10mm(benchmark::State& state) { run_pressing(state, true, 0.01); }
 
 // One substep's contact query: place the arm's and the probe's capsules, broad and narrow phase
 // against the scene's obstacles, the forces of the touching pair, at a pressing state.
@@ -70,6 +82,7 @@ void BM_ContactQuery(benchmark::State& state) {
 
 BENCHMARK(BM_CycleInContact)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CycleWithoutScene)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CycleInContact_FrictionVelocity10mm)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ContactQuery)->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();
