@@ -142,10 +142,17 @@ Decomposition decompose(const Eigen::MatrixXd& A) {
 
 Identifiability identifiability(const IdentificationModel& id, const Eigen::MatrixXd& scaled,
                                 const Eigen::MatrixXd& task_scaled, double weight) {
-  const int p = id.parameters();
-  if (scaled.cols() != p || (task_scaled.rows() > 0 && task_scaled.cols() != p))
+  if (scaled.cols() != id.parameters())
     throw std::invalid_argument("identifiability: regressor with the wrong number of columns");
-  const Decomposition d = decompose(weight * scaled.transpose() * scaled);
+  return identifiability_of_information(id, weight * scaled.transpose() * scaled, task_scaled);
+}
+
+Identifiability identifiability_of_information(const IdentificationModel& id, const Eigen::MatrixXd& information,
+                                               const Eigen::MatrixXd& task_scaled) {
+  const int p = id.parameters();
+  if (information.rows() != p || information.cols() != p || (task_scaled.rows() > 0 && task_scaled.cols() != p))
+    throw std::invalid_argument("identifiability: information or task regressor of the wrong size");
+  const Decomposition d = decompose(information);
   Identifiability out;
   out.parameters = p;
   out.singular_values = d.eigenvalues.reverse().cwiseSqrt();

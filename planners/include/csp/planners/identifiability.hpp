@@ -94,6 +94,9 @@ struct Identifiability {
 // (e.g. the number of periods when W^ holds one period).
 Identifiability identifiability(const IdentificationModel& id, const Eigen::MatrixXd& scaled,
                                 const Eigen::MatrixXd& task_scaled, double weight = 1.0);
+// The same from the information A = W^T W^ itself (e.g. summed over the segments of a plan).
+Identifiability identifiability_of_information(const IdentificationModel& id, const Eigen::MatrixXd& information,
+                                               const Eigen::MatrixXd& task_scaled);
 
 // The design criterion Phi = -(1/p) log det(A + eps I) + lambda log J_t (lambda = 0 or no task: the
 // D-criterion alone) and dPhi/dA (p x p, symmetric; eps = 1e-9 tr(A)/p is differentiated too).
