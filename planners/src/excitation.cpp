@@ -167,6 +167,11 @@ FourierSeries ExcitationProblem::series(const std::vector<double>& x) const {
   return FourierSeries::rest_to_rest(options_.fundamental_hz, options_.harmonics, free, options_.anchor);
 }
 
+Criterion ExcitationProblem::design_value(const Eigen::MatrixXd& A, double lambda) const {
+  if (options_.design == ExcitationOptions::Design::kConditionNumber) return condition_criterion(A);
+  return design_criterion(A, task_information_, task_rows_, lambda);
+}
+
 JointSample ExcitationProblem::design_state(const Eigen::MatrixXd& free, int k) const {
   JointSample s;
   s.q = options_.anchor + free * design_q_.row(k).transpose();
@@ -203,7 +208,7 @@ double ExcitationProblem::criterion(const std::vector<double>& x, std::vector<do
   const double lambda = options_.task.empty() ? 0.0 : options_.task_weight;
   Eigen::MatrixXd A = periods * W.transpose() * W;
   if (options_.prior_information.size() > 0) A += options_.prior_information;
-  const Criterion c = design_criterion(A, task_information_, task_rows_, lambda);
+  const Criterion c = design_value(A, lambda);
   if (gradient) {
     // dPhi/dW = 2 P W dPhi/dA = G. Per sample, dPhi/ds = d/ds <G_k, W_k(s)> with W_k = Sigma^-1/2 R S, i.e.
     // <H, R(s)> with H = Sigma^-1/2 G_k S. The inertial part is sum_j Y_j(s) h_j (row j of H on the base
@@ -425,7 +430,7 @@ ExcitationCriteria ExcitationProblem::evaluate(const FourierSeries& series, doub
   ExcitationCriteria out;
   out.identifiability = identifiability_of_information(id_, A, task);
   const double lambda = options_.task.empty() ? 0.0 : options_.task_weight;
-  out.criterion = design_criterion(A, task_information_, task_rows_, lambda).value;
+  out.criterion = design_value(A, lambda).value;
   return out;
 }
 

@@ -199,4 +199,23 @@ Criterion design_criterion(const Eigen::MatrixXd& A, const Eigen::MatrixXd& task
   return c;
 }
 
+Criterion condition_criterion(const Eigen::MatrixXd& A, int order) {
+  const Eigen::Index p = A.rows();
+  const Decomposition d = decompose(A);
+  const double r = order;
+  // Scaled by the largest and the smallest eigenvalue, so that mu^r and mu^-r neither overflow nor vanish.
+  const Eigen::ArrayXd mu = d.eigenvalues.array() + d.eps;   // ascending
+  Eigen::ArrayXd up(p), down(p);
+  for (Eigen::Index i = 0; i < p; ++i) up[i] = std::pow(mu[i] / mu[p - 1], r), down[i] = std::pow(mu[0] / mu[i], r);
+  Criterion c;
+  c.value = (std::log(mu[p - 1]) + std::log(up.sum()) / r - std::log(mu[0]) + std::log(down.sum()) / r) / 2.0;
+  c.log_det = mu.log().sum() / static_cast<double>(p);
+  // d/dmu_i: (1/2) (mu_i^(r-1) / sum mu^r - mu_i^(-r-1) / sum mu^-r); dmu_i/dA = v_i v_i^T + deps/dA.
+  const Eigen::ArrayXd dmu = 0.5 * (up / (mu * up.sum()) - down / (mu * down.sum()));
+  const double deps_dA = 1e-9 / static_cast<double>(p);
+  c.gradient = d.vectors * dmu.matrix().asDiagonal() * d.vectors.transpose();
+  c.gradient += dmu.sum() * deps_dA * Eigen::MatrixXd::Identity(p, p);
+  return c;
+}
+
 }  // namespace csp::planners

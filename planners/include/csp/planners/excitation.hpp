@@ -51,6 +51,10 @@ struct ExcitationOptions {
   // The task states the identification should serve; empty: whole-workspace D-optimal design.
   std::vector<JointSample> task;
   double task_weight = 1.0;           // lambda
+  // kConditionNumber: minimise condition_criterion (a smooth log kappa) instead of Phi; the task
+  // samples are then only reported on (J_t, r_t), not weighted.
+  enum class Design { kInformation, kConditionNumber };
+  Design design = Design::kInformation;
   // The information W^T W^ of what the plan already identifies (the segments at earlier anchors,
   // ExcitationProblem::information), added to this segment's: A = prior + P W^_1^T W^_1. Empty: none.
   Eigen::MatrixXd prior_information;
@@ -125,6 +129,8 @@ class ExcitationProblem {
   Eigen::MatrixXd design_q_, design_dq_, design_ddq_, design_dddq_;
 
   JointSample design_state(const Eigen::MatrixXd& free, int k) const;
+  // Phi (or the condition criterion, options_.design) of the information A and dPhi/dA.
+  Criterion design_value(const Eigen::MatrixXd& A, double lambda) const;
   // d/dx of a quantity of sample k whose derivatives in (q, dq, ddq) are `ds` (1 x 21).
   Eigen::VectorXd chain(const Eigen::Matrix<double, 1, 3 * kNumJoints>& ds, int k) const;
 };
