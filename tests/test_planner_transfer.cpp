@@ -214,11 +214,24 @@ TEST(Transfer, EveryShippedTransferIsFreeAndWithinLimitsAt1kHz) {
           EXPECT_LE(r.torque, fractions.torque * 1.001);
           EXPECT_LE(r.tool_speed, 1.001);
           EXPECT_LT(r.largest_step, 0.01);
+          // The certified margin along the 1 kHz path (the check's motion bound): at most the dense
+          // minimum, and no state of its motion, re-sampled 100 times against every pair, goes below it.
+          const planners::TrajectoryCheck checked = planners::check_trajectory(log, model, scene);
+          EXPECT_LE(checked.certified_min_clearance, checked.dense_min_clearance);
+          EXPECT_NEAR(checked.dense_min_clearance, r.lowest_clearance, 1e-12);
+          EXPECT_GE(checked.certified_min_clearance, 0.0);
+          const auto row = static_cast<std::size_t>(std::lround(checked.t_certified_min * 1000.0));
+          ASSERT_LT(row + 1, log.size());
+          for (int i = 0; i <= 100; ++i) {
+            const Vector7 q = log.q[row] + (i / 100.0) * (log.q[row + 1] - log.q[row]);
+            EXPECT_GE(checker.check_all_pairs(q).clearance, checked.certified_min_clearance - 1e-12);
+          }
           std::string bindings;
           for (const auto& segment : timed.segments) bindings += (bindings.empty() ? "" : ",") + segment.binding;
-          std::printf("%s %s %s -> %s: %zu waypoints, %.3f s (%s), lowest clearance %.4f m (%s)\n", robot.c_str(),
-                      name.c_str(), from.name.c_str(), to.name.c_str(), plan.waypoints.size(), timed.profile.duration(),
-                      bindings.c_str(), r.lowest_clearance, r.lowest_pair.c_str());
+          std::printf("%s %s %s -> %s: %zu waypoints, %.3f s (%s), lowest clearance %.4f m (%s), certified %.4f m\n",
+                      robot.c_str(), name.c_str(), from.name.c_str(), to.name.c_str(), plan.waypoints.size(),
+                      timed.profile.duration(), bindings.c_str(), r.lowest_clearance, r.lowest_pair.c_str(),
+                      checked.certified_min_clearance);
           ++transfers;
         }
     }
