@@ -492,6 +492,14 @@ TEST(Timing, InfeasibleLimitsGetOneClearError) {
   planners::TimingLimits too_much;
   too_much.velocity = 1.5;
   EXPECT_NE(error({ready, other}, too_much).find("velocity limit 1.5"), std::string::npos) << error({ready, other}, too_much);
+  planners::TimingLimits rate;
+  rate.torque_rate = 0.0;
+  EXPECT_NE(error({ready, other}, rate).find("torque rate limit 0"), std::string::npos) << error({ready, other}, rate);
+  planners::TimingLimits no_power;
+  no_power.power = 1e-9;   // lifting against gravity: its power decays only as 1/T
+  Vector7 lifted = ready;
+  lifted[1] = -1.2;
+  EXPECT_NE(error({ready, lifted}, no_power).find("the power stays above"), std::string::npos) << error({ready, lifted}, no_power);
 }
 
 // The torque rate and the power: moves whose peak-set timing would exceed them are stretched just

@@ -16,6 +16,7 @@ namespace {
 
 constexpr int kPhases = 1000;              // grid of the stretching checks (per segment)
 constexpr int kDynamicRounds = 30;         // rounds of the torque, torque rate and power stretches
+constexpr double kLongestSegment = 1e5;    // [s]: a power limit that needs longer is an error
 
 std::string joint_text(int j) { return "joint " + std::to_string(j + 1); }
 
@@ -173,11 +174,16 @@ double grid_power(const std::vector<DynamicPhase>& phases, const FrictionModel& 
 // T; it assumes that the grid's peak power does not rise again above a passing T (true while
 // gravity's power, the slowest-decaying term, is not what binds; a failing T is never returned).
 void stretch_for_power(const std::vector<DynamicPhase>& phases, const Model& model, const TimingLimits& fractions,
-                       SegmentTiming& timing) {
+                       int index, SegmentTiming& timing) {
   const FrictionModel& friction = model.parameters().friction;
   if (grid_power(phases, friction, timing.duration) <= fractions.power) return;
   double low = timing.duration, high = 2.0 * low;
-  while (grid_power(phases, friction, high) > fractions.power) low = high, high *= 2.0;
+  while (grid_power(phases, friction, high) > fractions.power) {
+    if (high > kLongestSegment)
+      throw std::invalid_argument("timing: segment " + std::to_string(index) + ": the power stays above " +
+                                  std::to_string(fractions.power) + " W even over " + std::to_string(kLongestSegment) + " s");
+    low = high, high *= 2.0;
+  }
   while (high - low > 1e-6 * high) {
     const double middle = 0.5 * (low + high);
     (grid_power(phases, friction, middle) > fractions.power ? low : high) = middle;
@@ -241,7 +247,7 @@ SegmentTiming time_segment(const Vector7& a, const Vector7& b, const Model& mode
     const double before = timing.duration;
     stretch_for_torque(phases, model, fractions, index, timing);
     stretch_for_torque_rate(phases, model, fractions, timing);
-    stretch_for_power(phases, model, fractions, timing);
+    stretch_for_power(phases, model, fractions, index, timing);
     if (timing.duration == before) break;
     if (round == kDynamicRounds)
       throw std::invalid_argument("timing: segment " + std::to_string(index) + ": the torque, its rate and the power " +
