@@ -292,5 +292,106 @@ TEST(ClosedLoop, PlanEmulateGapNamesEachChangeOfThePlant) {
   EXPECT_LT(std::sqrt(error / change), 0.5);
 }
 
+// --- the medical claim on the emulated robot ----------------------------------------------------
+
+// The identification model of the excitation design (planners/identifiability.hpp: the base inertial
+// parameters and Gaz et al.'s linear friction columns), for the Panda with the probe.
+const planners::IdentificationModel& identification() {
+  static const planners::IdentificationModel id = [] {
+    ModelOptions options;
+    options.friction = "gaz2019_linear_cls";
+    return planners::IdentificationModel(
+        Model(with_tool(model_parameters(load_robot_config(robot_file("panda")), options), scene().tool)));
+  }();
+  return id;
+}
+
+// An emulated log as gap reads it (gap/signal.hpp: resampled, Savitzky-Golay smoothed and
+// differentiated, one sample per 10 ms): its regressor rows, its filtered torques, and the plant's
+// rigid-body torque along the same samples (RNEA of the plant's own parameters).
+struct Rows {
+  Eigen::MatrixXd R;       // physical rows, 7K x p
+  Eigen::VectorXd tau;     // filtered measured torque (armature zero: the Panda's plant has none)
+  Eigen::VectorXd rigid;   // the plant's M ddq + c + g
+};
+
+Rows rows_of(const std::string& log, const Model& plant) {
+  const gap::Samples samples = gap::filter_log(read_joint_log_csv(log), gap::FilterOptions{});
+  const planners::IdentificationModel& id = identification();
+  const Eigen::Index n = static_cast<Eigen::Index>(kNumJoints * samples.size());
+  Rows r{Eigen::MatrixXd(n, id.parameters()), Eigen::VectorXd(n), Eigen::VectorXd(n)};
+  Data data;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const Eigen::Index row = static_cast<Eigen::Index>(kNumJoints * k);
+    r.R.middleRows(row, kNumJoints) = id.rows(data, {samples.q[k], samples.dq[k], samples.ddq[k], Vector7::Zero()});
+    r.tau.segment(row, kNumJoints) = samples.tau[k];
+    Vector7 tau;
+    rnea(plant, data, samples.q[k], samples.dq[k], samples.ddq[k], tau);
+    r.rigid.segment(row, kNumJoints) = tau;
+  }
+  return r;
+}
+
+// Weighted least squares on the scaled rows (Sigma^-1/2 R S), theta = S z: what the design's
+// predicted covariance is of (docs/excitation.md).
+Eigen::VectorXd identify(const Rows& r) {
+  const planners::IdentificationModel& id = identification();
+  Eigen::MatrixXd W(r.R.rows(), r.R.cols());
+  Eigen::VectorXd tau(r.tau.size());
+  for (Eigen::Index row = 0; row < r.R.rows(); row += kNumJoints) {
+    W.middleRows(row, kNumJoints) = id.scale_rows(r.R.middleRows(row, kNumJoints));
+    tau.segment(row, kNumJoints) = r.tau.segment(row, kNumJoints).cwiseQuotient(id.noise_sigma());
+  }
+  return id.column_scale().cwiseProduct(W.colPivHouseholderQr().solve(tau));
+}
+
+double rms(const Eigen::VectorXd& v) { return std::sqrt(v.squaredNorm() / static_cast<double>(v.size())); }
+
+// Two excitations of equal length (the same transfers, 10 s at the same anchor: task-weighted and
+// whole-workspace D-optimal), each emulated on the changed plant (payload, link 4 +10 %, Gaz et al.'s
+// sigmoid friction) and identified; each predicts the scan (`csp plan task`, played on the emulator in
+// free space on the same plant). Judged on the rigid-body torque, against the plant's own (RNEA of its
+// parameters along the scan's filtered motion): the whole torque's prediction error, 0.13-0.14 N m
+// for both, is mostly a bias both share, of the model class's friction (a Coulomb level reached at
+// 0.01 rad/s) against the plant's sigmoid (zero at rest, shallow) at the scan's few 0.01 rad/s.
+//
+// DISABLED: the claim does not hold here. Measured (rigid-body RMS, task-weighted vs D-optimal):
+// 0.029 vs 0.020 N m (1 period, 20 evaluations), 0.027 vs 0.020 (3 periods, 40), 0.043 vs 0.025
+// (1 period, 100); the whole torque 0.139 vs 0.129 N m. On the dynamics core with the plant's
+// friction inside the model class (RoundTrip.*) it holds (0.0147 vs 0.0181). Open: whether the
+// sigmoid's misfit leaking into the inertial estimate is what reverses it (docs/excitation.md).
+// Run: build/tests/csp_closed_loop_tests --gtest_also_run_disabled_tests --gtest_filter='*TaskWeighted*'
+TEST(ClosedLoop, DISABLED_TaskWeightedExcitationPredictsTheEmulatedScanBetterThanDOptimal) {
+  PlantChange change;
+  change.payload = payload();
+  change.link4_scale = 1.1;
+  ModelParameters truth = with_tool(model_parameters(load_robot_config(robot_file("panda")), {}), scene().tool);
+  truth.load = payload();
+  truth.links[3].mass *= 1.1;
+  truth.links[3].inertia *= 1.1;
+  const Model plant(truth);
+
+  const std::string scan_dir = (temp_dir() / "scan").string();
+  const ProgramRun task = csp({"plan", "task", "--scene", kScene, "--out", scan_dir});
+  ASSERT_EQ(task.exit_code, 0) << task.err << task.out;
+  PlantChange exact = change;
+  exact.noise = false;
+  const Rows scan = rows_of(emulate(changed_scenario(scan_dir, "scan_exact.yaml", exact)), plant);
+  const Rows scan_noisy = rows_of(emulate(changed_scenario(scan_dir, "scan_noisy.yaml", change)), plant);
+  const int base = identification().base_parameters();
+  double rigid[2] = {0.0, 0.0}, whole[2] = {0.0, 0.0}, noisy[2] = {0.0, 0.0};
+  for (const bool weighted : {false, true}) {
+    const std::string& dir = plan(weighted ? "task" : "d");
+    const Eigen::VectorXd theta = identify(rows_of(emulate(changed_scenario(dir, "identify.yaml", change)), plant));
+    rigid[weighted] = rms(scan.R.leftCols(base) * theta.head(base) - scan.rigid);
+    whole[weighted] = rms(scan.R * theta - scan.tau);
+    noisy[weighted] = rms(scan_noisy.R * theta - scan_noisy.tau);
+  }
+  std::cout << "emulated scan, prediction RMS task-weighted vs D-optimal: rigid-body torque " << rigid[1] << " vs "
+            << rigid[0] << " N m; whole torque " << whole[1] << " vs " << whole[0] << " N m; against a noisy record "
+            << noisy[1] << " vs " << noisy[0] << " N m\n";
+  EXPECT_LT(rigid[1], rigid[0]);
+}
+
 }  // namespace
 }  // namespace csp::test
