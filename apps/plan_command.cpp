@@ -342,19 +342,23 @@ struct ExciteArguments {
   double fundamental_hz = planners::ExcitationOptions{}.fundamental_hz;
   int periods = planners::ExcitationOptions{}.periods;
   int anchors = 1;
+  std::string placement = "hover";
   std::string criterion = "task";
   int max_evaluations = planners::ExcitationOptions{}.max_evaluations;
   long transfer_iterations = planners::TransferOptions{}.max_iterations;
 };
 
 // start -> anchor 1 (excite) -> anchor 2 (excite) ... -> start: one rest-to-rest trajectory. The
-// anchors are the k-medoids of the task path's states (PAM, joint-space distance), each retracted
-// along its own tool axis off the patient (task_anchor), in the task's order; their excitations are
-// designed one after the other, each with the earlier ones' information (solve_anchors), so the
-// criterion is the whole plan's.
+// anchors are the task's hover poses (its start's, its end's) or, with --anchor-placement medoids,
+// the k-medoids of the task path's states (PAM, joint-space distance), each retracted along its own
+// tool axis off the patient (task_anchor), in the task's order; their excitations are designed one
+// after the other, each with the earlier ones' information (solve_anchors), so the criterion is the
+// whole plan's.
 int run_excite(const ExciteArguments& args, const CLI::App& command) {
   const PlanContext c = load_context("excite", args.plan, command);
   if (args.anchors < 1) throw UsageError("--anchors: expected 1 or more excitation anchors");
+  if (args.placement != "hover" && args.placement != "medoids")
+    throw UsageError("--anchor-placement: expected hover (the task's hover poses) or medoids (k-medoids of its states)");
   if (args.criterion != "task" && args.criterion != "d" && args.criterion != "cond")
     throw UsageError("--criterion: expected task (weighted toward the task's states), d (whole workspace, D-optimal) "
                      "or cond (the condition number)");
@@ -368,6 +372,9 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
     if (is_budget(e)) return no_plan(c, e.what(), nlohmann::json());
     throw;
   }
+  if (args.placement == "hover" && static_cast<std::size_t>(args.anchors) > task.anchors.size())
+    throw UsageError("--anchors: the task of " + c.scene.name + " has " + std::to_string(task.anchors.size()) +
+                     " hover anchor(s); --anchor-placement medoids places any number");
   if (static_cast<std::size_t>(args.anchors) > task.states.size())
     throw UsageError("--anchors: the task path of " + c.scene.name + " has " + std::to_string(task.states.size()) +
                      " states to choose anchors from");
@@ -378,13 +385,17 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
 
   planners::ClearanceChecker checker(c.model, c.scene);
   planners::TaskConstraint constraint(c.model, c.scene);
-  const planners::Medoids medoids = planners::k_medoids(task.states, args.anchors);
-  std::vector<Vector7> anchors;
-  for (const int i : medoids.indices) {
-    try {
-      anchors.push_back(planners::task_anchor(constraint, task.states[static_cast<std::size_t>(i)], checker));
-    } catch (const planners::TaskError& e) {
-      return no_plan(c, std::string("anchor at task state ") + std::to_string(i) + ": " + e.what(), nlohmann::json());
+  planners::Medoids medoids;   // hover: the task's first anchors (its start's and end's hover poses)
+  std::vector<Vector7> anchors(task.anchors.begin(), task.anchors.begin() + std::min<std::ptrdiff_t>(args.anchors, std::ssize(task.anchors)));
+  if (args.placement == "medoids") {
+    medoids = planners::k_medoids(task.states, args.anchors);
+    anchors.clear();
+    for (const int i : medoids.indices) {
+      try {
+        anchors.push_back(planners::task_anchor(constraint, task.states[static_cast<std::size_t>(i)], checker));
+      } catch (const planners::TaskError& e) {
+        return no_plan(c, std::string("anchor at task state ") + std::to_string(i) + ": " + e.what(), nlohmann::json());
+      }
     }
   }
   planners::ExcitationOptions options;
@@ -430,7 +441,6 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
     }
     segments.push_back({{"kind", "excitation"},
                         {"anchor", joints_json({anchor.q})[0]},
-                        {"task_state", medoids.indices[a]},
                         {"fundamental_hz", result.series.fundamental_hz()},
                         {"duration", result.duration},
                         {"time_scale", result.time_scale},
@@ -451,13 +461,15 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
                           {"task_residual", id.task_residual},
                           {"task_torque_sigma", joints_json({id.task_torque_sigma})[0]}}},
                         {"limit_usage", result.usage.worst()}});
+    if (!medoids.indices.empty()) segments.back()["task_state"] = medoids.indices[a];
     at = anchor;
   }
   const std::optional<TimedPath> home = transfer(c, checker, at, c.scene.pose(c.scene.start), transfer_options, problem, best);
   if (!home) return no_plan(c, problem, best);
   append(planned.trajectory, home->log);
   segments.push_back(home->made);
-  planned.made = {{"criterion", args.criterion}, {"medoid_distance", medoids.cost}, {"segments", segments}};
+  planned.made = {{"criterion", args.criterion}, {"anchor_placement", args.placement}, {"segments", segments}};
+  if (!medoids.indices.empty()) planned.made["medoid_distance"] = medoids.cost;
   planned.trajectory.source = "csp plan excite";
   return finish_plan(c, std::move(planned));
 }
@@ -524,7 +536,11 @@ Command add_plan_command(CLI::App& app) {
   excite_command->add_option("--fundamental-hz", excite->fundamental_hz, "Fundamental frequency [Hz]")
       ->capture_default_str();
   excite_command->add_option("--periods", excite->periods, "Periods per anchor")->capture_default_str();
-  excite_command->add_option("--anchors", excite->anchors, "Excitation anchors: the k-medoids of the task path's states, retracted off the patient")
+  excite_command->add_option("--anchors", excite->anchors, "Excitation anchors (hover: at most the task's 2)")
+      ->capture_default_str();
+  excite_command->add_option("--anchor-placement", excite->placement,
+                             "hover (the task's hover poses) or medoids (k-medoids of the task path's states, "
+                             "retracted off the patient)")
       ->capture_default_str();
   excite_command->add_option("--criterion", excite->criterion, "task (weighted toward the task), d (D-optimal) or cond (condition number)")
       ->capture_default_str();
