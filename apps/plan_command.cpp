@@ -18,6 +18,7 @@
 #include "csp/io/yaml_field.hpp"
 #include "csp/planners/checker.hpp"
 #include "csp/planners/excitation.hpp"
+#include "csp/planners/kmedoids.hpp"
 #include "csp/planners/plan_files.hpp"
 #include "csp/planners/profile.hpp"
 #include "csp/planners/report.hpp"
@@ -341,18 +342,27 @@ struct ExciteArguments {
   double fundamental_hz = planners::ExcitationOptions{}.fundamental_hz;
   int periods = planners::ExcitationOptions{}.periods;
   int anchors = 1;
+  std::string placement = "hover";
   std::string criterion = "task";
   int max_evaluations = planners::ExcitationOptions{}.max_evaluations;
   long transfer_iterations = planners::TransferOptions{}.max_iterations;
 };
 
-// start -> anchor 1 (excite) -> anchor 2 (excite) ... -> start: one rest-to-rest trajectory.
+// start -> anchor 1 (excite) -> anchor 2 (excite) ... -> start: one rest-to-rest trajectory. The
+// anchors are the task's hover poses (its start's, its end's) or, with --anchor-placement medoids,
+// the k-medoids of the task path's states (PAM, joint-space distance), each retracted along its own
+// tool axis off the patient (task_anchor), in the task's order; their excitations are designed one
+// after the other, each with the earlier ones' information (solve_anchors), so the criterion is the
+// whole plan's.
 int run_excite(const ExciteArguments& args, const CLI::App& command) {
   const PlanContext c = load_context("excite", args.plan, command);
   if (args.anchors < 1) throw UsageError("--anchors: expected 1 or more excitation anchors");
-  if (args.criterion != "task" && args.criterion != "d")
-    throw UsageError("--criterion: expected task (weighted toward the task's states) or d (whole workspace, D-optimal)");
-  // The task's anchors (hover poses by IK) and, for the task-weighted criterion, its states.
+  if (args.placement != "hover" && args.placement != "medoids")
+    throw UsageError("--anchor-placement: expected hover (the task's hover poses) or medoids (k-medoids of its states)");
+  if (args.criterion != "task" && args.criterion != "d" && args.criterion != "cond")
+    throw UsageError("--criterion: expected task (weighted toward the task's states), d (whole workspace, D-optimal) "
+                     "or cond (the condition number)");
+  // The task's path: its states place the anchors and, for the task-weighted criterion, weight the design.
   planners::TaskPathOptions task_options;
   task_options.seed = static_cast<unsigned>(c.request.seed);
   planners::TaskPath task;
@@ -362,15 +372,43 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
     if (is_budget(e)) return no_plan(c, e.what(), nlohmann::json());
     throw;
   }
-  if (static_cast<std::size_t>(args.anchors) > task.anchors.size())
+  if (args.placement == "hover" && static_cast<std::size_t>(args.anchors) > task.anchors.size())
     throw UsageError("--anchors: the task of " + c.scene.name + " has " + std::to_string(task.anchors.size()) +
-                     " anchor(s)");
+                     " hover anchor(s); --anchor-placement medoids places any number");
+  if (static_cast<std::size_t>(args.anchors) > task.states.size())
+    throw UsageError("--anchors: the task path of " + c.scene.name + " has " + std::to_string(task.states.size()) +
+                     " states to choose anchors from");
   std::vector<planners::JointSample> task_states;
-  if (args.criterion == "task")
+  if (args.criterion != "d")   // task: weighted toward them; cond: reported on them (J_t, r_t)
     for (std::size_t k = 0; k < task.log.size(); k += 100)   // 10 Hz over the task
       task_states.push_back({task.log.q[k], task.log.dq[k], task.log.ddq[k], Vector7::Zero()});
 
   planners::ClearanceChecker checker(c.model, c.scene);
+  planners::TaskConstraint constraint(c.model, c.scene);
+  planners::Medoids medoids;   // hover: the task's first anchors (its start's and end's hover poses)
+  std::vector<Vector7> anchors(task.anchors.begin(), task.anchors.begin() + std::min<std::ptrdiff_t>(args.anchors, std::ssize(task.anchors)));
+  if (args.placement == "medoids") {
+    medoids = planners::k_medoids(task.states, args.anchors);
+    anchors.clear();
+    for (const int i : medoids.indices) {
+      try {
+        anchors.push_back(planners::task_anchor(constraint, task.states[static_cast<std::size_t>(i)], checker));
+      } catch (const planners::TaskError& e) {
+        return no_plan(c, std::string("anchor at task state ") + std::to_string(i) + ": " + e.what(), nlohmann::json());
+      }
+    }
+  }
+  planners::ExcitationOptions options;
+  options.harmonics = args.harmonics;
+  options.fundamental_hz = args.fundamental_hz;
+  options.periods = args.periods;
+  options.task = task_states;
+  if (args.criterion == "cond") options.design = planners::ExcitationOptions::Design::kConditionNumber;
+  options.seed = static_cast<unsigned>(c.request.seed);
+  options.max_evaluations = args.max_evaluations;
+  options.clearance = [&checker](const Vector7& q) { return checker.check(q).clearance; };
+  const planners::MultiAnchorExcitation excitation = planners::solve_anchors(c.model, options, anchors);
+
   planners::TransferOptions transfer_options;
   transfer_options.seed = c.request.seed;
   transfer_options.max_iterations = args.transfer_iterations;
@@ -379,24 +417,16 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
   NamedPose at = c.scene.pose(c.scene.start);
   std::string problem;
   nlohmann::json best;
-  for (int a = 0; a < args.anchors; ++a) {
-    const NamedPose anchor{"anchor" + std::to_string(a + 1), task.anchors[static_cast<std::size_t>(a)]};
-    const std::optional<TimedPath> there = transfer(c, checker, at, anchor, transfer_options, problem, best);
-    if (!there) return no_plan(c, problem, best);
-    append(planned.trajectory, there->log);
-    segments.push_back(there->made);
+  for (std::size_t a = 0; a < anchors.size(); ++a) {
+    const NamedPose anchor{"anchor" + std::to_string(a + 1), anchors[a]};
+    if (anchor.q != at.q) {   // two medoids can retract to one anchor (the burr hole's: one axis, one hover point)
+      const std::optional<TimedPath> there = transfer(c, checker, at, anchor, transfer_options, problem, best);
+      if (!there) return no_plan(c, problem, best);
+      append(planned.trajectory, there->log);
+      segments.push_back(there->made);
+    }
 
-    planners::ExcitationOptions options;
-    options.anchor = anchor.q;
-    options.harmonics = args.harmonics;
-    options.fundamental_hz = args.fundamental_hz;
-    options.periods = args.periods;
-    options.task = task_states;
-    options.seed = static_cast<unsigned>(c.request.seed + static_cast<std::uint64_t>(a));
-    options.max_evaluations = args.max_evaluations;
-    options.clearance = [&checker](const Vector7& q) { return checker.check(q).clearance; };
-    const planners::ExcitationProblem problem_a(c.model, options);
-    const planners::ExcitationResult result = problem_a.solve();
+    const planners::ExcitationResult& result = excitation.segments[a];
     append(planned.trajectory, planners::trajectory_log(result.series, result.duration, 1000.0, c.model));
     const planners::Identifiability& id = result.criteria.identifiability;
     planned.singular_values.assign(id.singular_values.data(), id.singular_values.data() + id.singular_values.size());
@@ -421,7 +451,7 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
                         {"best_random_start_criterion", result.best_start_criterion},
                         {"evaluations", result.evaluations},
                         {"optimizer", result.optimizer_result},
-                        {"identifiability",
+                        {"identifiability",   // of the excitations so far (this one and the earlier anchors')
                          {{"parameters", id.parameters},
                           {"rank", id.rank},
                           {"condition_number", id.condition_number},
@@ -431,13 +461,15 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
                           {"task_residual", id.task_residual},
                           {"task_torque_sigma", joints_json({id.task_torque_sigma})[0]}}},
                         {"limit_usage", result.usage.worst()}});
+    if (!medoids.indices.empty()) segments.back()["task_state"] = medoids.indices[a];
     at = anchor;
   }
   const std::optional<TimedPath> home = transfer(c, checker, at, c.scene.pose(c.scene.start), transfer_options, problem, best);
   if (!home) return no_plan(c, problem, best);
   append(planned.trajectory, home->log);
   segments.push_back(home->made);
-  planned.made = {{"criterion", args.criterion}, {"segments", segments}};
+  planned.made = {{"criterion", args.criterion}, {"anchor_placement", args.placement}, {"segments", segments}};
+  if (!medoids.indices.empty()) planned.made["medoid_distance"] = medoids.cost;
   planned.trajectory.source = "csp plan excite";
   return finish_plan(c, std::move(planned));
 }
@@ -504,9 +536,13 @@ Command add_plan_command(CLI::App& app) {
   excite_command->add_option("--fundamental-hz", excite->fundamental_hz, "Fundamental frequency [Hz]")
       ->capture_default_str();
   excite_command->add_option("--periods", excite->periods, "Periods per anchor")->capture_default_str();
-  excite_command->add_option("--anchors", excite->anchors, "Excitation anchors (the task's hover poses)")
+  excite_command->add_option("--anchors", excite->anchors, "Excitation anchors (hover: at most the task's 2)")
       ->capture_default_str();
-  excite_command->add_option("--criterion", excite->criterion, "task (weighted toward the task) or d (D-optimal)")
+  excite_command->add_option("--anchor-placement", excite->placement,
+                             "hover (the task's hover poses) or medoids (k-medoids of the task path's states, "
+                             "retracted off the patient)")
+      ->capture_default_str();
+  excite_command->add_option("--criterion", excite->criterion, "task (weighted toward the task), d (D-optimal) or cond (condition number)")
       ->capture_default_str();
   excite_command->add_option("--max-evaluations", excite->max_evaluations, "The optimiser's budget per anchor")
       ->capture_default_str();

@@ -508,7 +508,7 @@ TEST(PlanCommand, TheSamePlanTwiceAndRebuiltGivesByteIdenticalFiles) {
       {"task", "--scene", "mis_rcm", "--robot", "fr3", "--seed", "3"}};
 #ifndef CSP_SANITIZE_BUILD   // the excitation's optimiser is slow under the sanitizers (csp_excitation_tests covers it)
   commands.push_back({"excite", "--scene", "craniotomy", "--robot", "fr3", "--periods", "1", "--max-evaluations", "20",
-                      "--verify"});
+                      "--anchors", "2", "--anchor-placement", "medoids", "--verify"});
 #endif
   for (const std::vector<std::string>& command : commands) {
     std::vector<std::map<std::string, std::string>> runs;
@@ -584,7 +584,7 @@ TEST(PlanCommand, BadRequestsExitTwoAndNoPlanInTheBudgetExitsOne) {
   const ProgramRun scene = run_csp({"plan", "task", "--scene", "no_such_scene.yaml", "--out", out});
   EXPECT_EQ(scene.exit_code, 2);
   EXPECT_NE(scene.err.find("--scene"), std::string::npos) << scene.err;
-  const ProgramRun criterion = run_csp({"plan", "excite", "--scene", "mis_rcm", "--criterion", "cond", "--out", out});
+  const ProgramRun criterion = run_csp({"plan", "excite", "--scene", "mis_rcm", "--criterion", "e", "--out", out});
   EXPECT_EQ(criterion.exit_code, 2);
   EXPECT_NE(criterion.err.find("--criterion"), std::string::npos) << criterion.err;
   const ProgramRun budget = run_csp({"plan", "transfer", "--scene", "craniotomy", "--from", "ready", "--to", "burr_hover",

@@ -23,6 +23,7 @@
 #include "csp/planners/ompl_bridge.hpp"
 #include "csp/planners/profile.hpp"
 #include "csp/io/scene.hpp"
+#include "csp/planners/trajectory_check.hpp"
 #include "csp/planners/transfer.hpp"
 #include "support.hpp"
 
@@ -213,11 +214,24 @@ TEST(Transfer, EveryShippedTransferIsFreeAndWithinLimitsAt1kHz) {
           EXPECT_LE(r.torque, fractions.torque * 1.001);
           EXPECT_LE(r.tool_speed, 1.001);
           EXPECT_LT(r.largest_step, 0.01);
+          // The certified margin along the 1 kHz path (the check's motion bound): at most the dense
+          // minimum, and no state of its motion, re-sampled 100 times against every pair, goes below it.
+          const planners::TrajectoryCheck checked = planners::check_trajectory(log, model, scene);
+          EXPECT_LE(checked.certified_min_clearance, checked.dense_min_clearance);
+          EXPECT_NEAR(checked.dense_min_clearance, r.lowest_clearance, 1e-12);
+          EXPECT_GE(checked.certified_min_clearance, 0.0);
+          const auto row = static_cast<std::size_t>(std::lround(checked.t_certified_min * 1000.0));
+          ASSERT_LT(row + 1, log.size());
+          for (int i = 0; i <= 100; ++i) {
+            const Vector7 q = log.q[row] + (i / 100.0) * (log.q[row + 1] - log.q[row]);
+            EXPECT_GE(checker.check_all_pairs(q).clearance, checked.certified_min_clearance - 1e-12);
+          }
           std::string bindings;
           for (const auto& segment : timed.segments) bindings += (bindings.empty() ? "" : ",") + segment.binding;
-          std::printf("%s %s %s -> %s: %zu waypoints, %.3f s (%s), lowest clearance %.4f m (%s)\n", robot.c_str(),
-                      name.c_str(), from.name.c_str(), to.name.c_str(), plan.waypoints.size(), timed.profile.duration(),
-                      bindings.c_str(), r.lowest_clearance, r.lowest_pair.c_str());
+          std::printf("%s %s %s -> %s: %zu waypoints, %.3f s (%s), lowest clearance %.4f m (%s), certified %.4f m\n",
+                      robot.c_str(), name.c_str(), from.name.c_str(), to.name.c_str(), plan.waypoints.size(),
+                      timed.profile.duration(), bindings.c_str(), r.lowest_clearance, r.lowest_pair.c_str(),
+                      checked.certified_min_clearance);
           ++transfers;
         }
     }
@@ -478,6 +492,79 @@ TEST(Timing, InfeasibleLimitsGetOneClearError) {
   planners::TimingLimits too_much;
   too_much.velocity = 1.5;
   EXPECT_NE(error({ready, other}, too_much).find("velocity limit 1.5"), std::string::npos) << error({ready, other}, too_much);
+  planners::TimingLimits rate;
+  rate.torque_rate = 0.0;
+  EXPECT_NE(error({ready, other}, rate).find("torque rate limit 0"), std::string::npos) << error({ready, other}, rate);
+  planners::TimingLimits no_power;
+  no_power.power = 1e-9;   // lifting against gravity: its power decays only as 1/T
+  Vector7 lifted = ready;
+  lifted[1] = -1.2;
+  EXPECT_NE(error({ready, lifted}, no_power).find("the power stays above"), std::string::npos) << error({ready, lifted}, no_power);
+}
+
+// The torque rate and the power: moves whose peak-set timing would exceed them are stretched just
+// enough, as the independent check (check_trajectory: RNEA on the 1 kHz log, the torque's backward
+// differences, sum of positive joint powers) finds: within at the planned duration, over at 3 %
+// less (the duration is rounded up to whole milliseconds: at most 1.3 % here), with the limit named
+// as the binding one. The shares are the check's full limits here, so that "just enough" is
+// measured against the check itself.
+struct StretchCase {
+  const char* name;
+  Vector7 from, to;
+  planners::TimingLimits limits;
+  const char* binding;      // expected binding of the segment
+  const char* check_kind;   // the check's failure kind at 3 % less
+};
+
+TEST(Timing, TorqueRateAndPowerAreStretchedJustEnoughAsTheCheckFindsAt1kHz) {
+  Scene scene = load_scene(scene_file("ultrasound_abdomen"));
+  scene.obstacles.clear();   // free space: the timing is on trial, not the geometry (self pairs stay)
+  const Model model = scene_model("panda", scene);
+  const JointLimits& limits = model.parameters().joint_limits;
+  const Vector7 ready = (Vector7() << 0, -0.785, 0, -2.356, 0, 1.571, 0.785).finished();
+  const Vector7 nudge = (Vector7() << 0.004, 0.004, 0, -0.004, 0, 0, 0).finished();   // a small correction
+  const Vector7 swing = (Vector7() << 1.6, 0.6, 0, 0.9, 0, 0, 0).finished();            // shoulder, lift and elbow
+  planners::TimingLimits full_rate;   // the robot's whole acceleration and jerk: a quick correction
+  full_rate.acceleration = full_rate.jerk = full_rate.torque_rate = 1.0;
+  full_rate.tool_speed = 100.0;
+  planners::TimingLimits low_power;
+  low_power.power = 10.0;
+  low_power.tool_speed = 100.0;
+  const StretchCase cases[] = {{"torque rate", ready, ready + nudge, full_rate, "torque rate", "torque_rate"},
+                               {"power", ready, ready + swing, low_power, "power", "power"}};
+  for (const StretchCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    const auto timed = planners::time_transfer({c.from, c.to}, model, c.limits);
+    ASSERT_EQ(timed.segments.size(), 1u);
+    EXPECT_EQ(timed.segments[0].binding, c.binding);
+    planners::CheckOptions options;
+    options.power_limit = c.limits.power;
+    options.tool_speed_limit = c.limits.tool_speed;
+    const auto check = [&](double scale) {
+      const planners::TransferProfile profile({c.from, c.to}, {timed.segments[0].duration * scale});
+      return planners::check_trajectory(planners::trajectory_log(profile, 1000.0, model), model, scene, options);
+    };
+    const planners::TrajectoryCheck planned = check(1.0);
+    for (const auto& failure : planned.failures) ADD_FAILURE() << planners::describe(failure);
+    double rate = 0.0;
+    for (const auto& joint : planned.joints) rate = std::max(rate, joint.torque_rate);
+    const double used = std::string(c.binding) == "power" ? planned.peak_power / c.limits.power : rate;
+    EXPECT_GT(used, 0.96);   // just enough: the 1 kHz peak is at the limit (whole milliseconds aside)
+    const auto over = [&](const planners::TrajectoryCheck& r) {
+      return std::any_of(r.failures.begin(), r.failures.end(), [&](const planners::CheckFailure& f) { return f.kind == c.check_kind; });
+    };
+    EXPECT_TRUE(over(check(0.97))) << "3 % faster than planned is still within the " << c.binding;
+    // The peak-set duration alone (velocity, acceleration, jerk: the closed form) is over too.
+    double peaks = 0.0;
+    const Vector7 delta = (c.to - c.from).cwiseAbs();
+    for (int j = 0; j < kNumJoints; ++j)
+      peaks = std::max({peaks, planners::kSepticPeakVelocity * delta[j] / (c.limits.velocity * limits.dq_max[j]),
+                        std::sqrt(planners::kSepticPeakAcceleration * delta[j] / (c.limits.acceleration * limits.ddq_max[j])),
+                        std::cbrt(planners::kSepticPeakJerk * delta[j] / (c.limits.jerk * limits.dddq_max[j]))});
+    EXPECT_TRUE(over(check(peaks / timed.segments[0].duration)));
+    std::printf("%s: peak-set %.3f s, stretched to %.3f s (%s); 1 kHz check: %.4f of the limit\n", c.name, peaks,
+                timed.segments[0].duration, timed.segments[0].binding.c_str(), used);
+  }
 }
 
 // ---------------- The bridge on a joint-space problem with an exact oracle ----------------

@@ -136,12 +136,15 @@ StateClearance ClearanceChecker::check_all_pairs(const Vector7& q) {
   return evaluate(Vector7::Zero(), false);
 }
 
+double ClearanceChecker::certified_clearance(const Vector7& q_a, const Vector7& q_b) {
+  place(0.5 * (q_a + q_b));
+  return evaluate(0.5 * (q_b - q_a).cwiseAbs(), true).clearance;
+}
+
 bool ClearanceChecker::motion_is_free(const Vector7& q_a, const Vector7& q_b, int max_depth) {
-  const Vector7 middle = 0.5 * (q_a + q_b);
-  const Vector7 half_step = 0.5 * (q_b - q_a).cwiseAbs();
-  place(middle);
-  if (evaluate(half_step, true).clearance >= 0.0) return true;
+  if (certified_clearance(q_a, q_b) >= 0.0) return true;   // leaves the midpoint placed
   if (max_depth == 0 || evaluate(Vector7::Zero(), true).clearance < 0.0) return false;   // not certified / collides
+  const Vector7 middle = 0.5 * (q_a + q_b);
   return motion_is_free(q_a, middle, max_depth - 1) && motion_is_free(middle, q_b, max_depth - 1);
 }
 

@@ -116,6 +116,10 @@ ExcitationProblem::ExcitationProblem(const Model& model, ExcitationOptions optio
     if (!(o.anchor[j] > limits.q_min[j] + l.position_margin && o.anchor[j] < limits.q_max[j] - l.position_margin))
       throw std::invalid_argument("excitation: anchor joint " + std::to_string(j + 1) + " is not inside its limits by the " +
                                   "position margin");
+  if (o.prior_information.size() > 0 &&
+      (o.prior_information.rows() != id_.parameters() || o.prior_information.cols() != id_.parameters()))
+    throw std::invalid_argument("excitation: prior_information must be " + std::to_string(id_.parameters()) + " x " +
+                                std::to_string(id_.parameters()));
   if (o.clearance && !(o.clearance(o.anchor) > 0.0))
     throw std::invalid_argument("excitation: the anchor is in collision (clearance <= 0)");
 
@@ -163,6 +167,11 @@ FourierSeries ExcitationProblem::series(const std::vector<double>& x) const {
   return FourierSeries::rest_to_rest(options_.fundamental_hz, options_.harmonics, free, options_.anchor);
 }
 
+Criterion ExcitationProblem::design_value(const Eigen::MatrixXd& A, double lambda) const {
+  if (options_.design == ExcitationOptions::Design::kConditionNumber) return condition_criterion(A);
+  return design_criterion(A, task_information_, task_rows_, lambda);
+}
+
 JointSample ExcitationProblem::design_state(const Eigen::MatrixXd& free, int k) const {
   JointSample s;
   s.q = options_.anchor + free * design_q_.row(k).transpose();
@@ -197,7 +206,9 @@ double ExcitationProblem::criterion(const std::vector<double>& x, std::vector<do
   Data data;
   for (int k = 0; k < samples; ++k) W.middleRows(kNumJoints * k, kNumJoints) = id_.scale_rows(id_.rows(data, design_state(free, k)));
   const double lambda = options_.task.empty() ? 0.0 : options_.task_weight;
-  const Criterion c = design_criterion(periods * W.transpose() * W, task_information_, task_rows_, lambda);
+  Eigen::MatrixXd A = periods * W.transpose() * W;
+  if (options_.prior_information.size() > 0) A += options_.prior_information;
+  const Criterion c = design_value(A, lambda);
   if (gradient) {
     // dPhi/dW = 2 P W dPhi/dA = G. Per sample, dPhi/ds = d/ds <G_k, W_k(s)> with W_k = Sigma^-1/2 R S, i.e.
     // <H, R(s)> with H = Sigma^-1/2 G_k S. The inertial part is sum_j Y_j(s) h_j (row j of H on the base
@@ -403,17 +414,23 @@ std::vector<double> ExcitationProblem::random_start(unsigned index) const {
   return scaled(good);
 }
 
-ExcitationCriteria ExcitationProblem::evaluate(const FourierSeries& series, double duration) const {
+Eigen::MatrixXd ExcitationProblem::information(const FourierSeries& series, double duration) const {
   std::vector<JointSample> samples;
   const auto count = static_cast<long>(std::ceil(duration * options_.design_rate_hz - 1e-9));
   for (long k = 0; k < count; ++k) samples.push_back(series.sample(static_cast<double>(k) / options_.design_rate_hz));
   const Eigen::MatrixXd W = id_.stacked_scaled(samples);
+  return W.transpose() * W;
+}
+
+ExcitationCriteria ExcitationProblem::evaluate(const FourierSeries& series, double duration) const {
+  Eigen::MatrixXd A = information(series, duration);
+  if (options_.prior_information.size() > 0) A += options_.prior_information;
   Eigen::MatrixXd task;
   if (!options_.task.empty()) task = id_.stacked_scaled(options_.task);
   ExcitationCriteria out;
-  out.identifiability = identifiability(id_, W, task);
+  out.identifiability = identifiability_of_information(id_, A, task);
   const double lambda = options_.task.empty() ? 0.0 : options_.task_weight;
-  out.criterion = design_criterion(W.transpose() * W, task_information_, task_rows_, lambda).value;
+  out.criterion = design_value(A, lambda).value;
   return out;
 }
 
@@ -578,6 +595,23 @@ ExcitationResult ExcitationProblem::solve() const {
   result.duration = options_.periods * series.period();
   result.criteria = evaluate(series, result.duration);
   return result;
+}
+
+MultiAnchorExcitation solve_anchors(const Model& model, const ExcitationOptions& options, const std::vector<Vector7>& anchors) {
+  if (anchors.empty()) throw std::invalid_argument("excitation: no anchors");
+  MultiAnchorExcitation out;
+  ExcitationOptions o = options;
+  for (std::size_t a = 0; a < anchors.size(); ++a) {
+    o.anchor = anchors[a];
+    o.seed = options.seed + static_cast<unsigned>(a);
+    const ExcitationProblem problem(model, o);
+    out.segments.push_back(problem.solve());
+    const ExcitationResult& r = out.segments.back();
+    const Eigen::MatrixXd segment = problem.information(r.series, r.duration);
+    o.prior_information = o.prior_information.size() > 0 ? Eigen::MatrixXd(o.prior_information + segment) : segment;
+    out.criteria = r.criteria;   // with the prior: every segment so far
+  }
+  return out;
 }
 
 }  // namespace csp::planners

@@ -142,10 +142,17 @@ Decomposition decompose(const Eigen::MatrixXd& A) {
 
 Identifiability identifiability(const IdentificationModel& id, const Eigen::MatrixXd& scaled,
                                 const Eigen::MatrixXd& task_scaled, double weight) {
-  const int p = id.parameters();
-  if (scaled.cols() != p || (task_scaled.rows() > 0 && task_scaled.cols() != p))
+  if (scaled.cols() != id.parameters())
     throw std::invalid_argument("identifiability: regressor with the wrong number of columns");
-  const Decomposition d = decompose(weight * scaled.transpose() * scaled);
+  return identifiability_of_information(id, weight * scaled.transpose() * scaled, task_scaled);
+}
+
+Identifiability identifiability_of_information(const IdentificationModel& id, const Eigen::MatrixXd& information,
+                                               const Eigen::MatrixXd& task_scaled) {
+  const int p = id.parameters();
+  if (information.rows() != p || information.cols() != p || (task_scaled.rows() > 0 && task_scaled.cols() != p))
+    throw std::invalid_argument("identifiability: information or task regressor of the wrong size");
+  const Decomposition d = decompose(information);
   Identifiability out;
   out.parameters = p;
   out.singular_values = d.eigenvalues.reverse().cwiseSqrt();
@@ -189,6 +196,25 @@ Criterion design_criterion(const Eigen::MatrixXd& A, const Eigen::MatrixXd& task
     c.gradient += lambda / c.task_criterion * (dJ + dJ.trace() * deps_dA * I);
   }
   c.gradient = 0.5 * (c.gradient + c.gradient.transpose()).eval();
+  return c;
+}
+
+Criterion condition_criterion(const Eigen::MatrixXd& A, int order) {
+  const Eigen::Index p = A.rows();
+  const Decomposition d = decompose(A);
+  const double r = order;
+  // Scaled by the largest and the smallest eigenvalue, so that mu^r and mu^-r neither overflow nor vanish.
+  const Eigen::ArrayXd mu = d.eigenvalues.array() + d.eps;   // ascending
+  Eigen::ArrayXd up(p), down(p);
+  for (Eigen::Index i = 0; i < p; ++i) up[i] = std::pow(mu[i] / mu[p - 1], r), down[i] = std::pow(mu[0] / mu[i], r);
+  Criterion c;
+  c.value = (std::log(mu[p - 1]) + std::log(up.sum()) / r - std::log(mu[0]) + std::log(down.sum()) / r) / 2.0;
+  c.log_det = mu.log().sum() / static_cast<double>(p);
+  // d/dmu_i: (1/2) (mu_i^(r-1) / sum mu^r - mu_i^(-r-1) / sum mu^-r); dmu_i/dA = v_i v_i^T + deps/dA.
+  const Eigen::ArrayXd dmu = 0.5 * (up / (mu * up.sum()) - down / (mu * down.sum()));
+  const double deps_dA = 1e-9 / static_cast<double>(p);
+  c.gradient = d.vectors * dmu.matrix().asDiagonal() * d.vectors.transpose();
+  c.gradient += dmu.sum() * deps_dA * Eigen::MatrixXd::Identity(p, p);
   return c;
 }
 

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <stdexcept>
 #include <string>
+
+#include <unsupported/Eigen/Polynomials>
 
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/dynamics/friction.hpp"
@@ -12,7 +15,8 @@ namespace csp::planners {
 namespace {
 
 constexpr int kPhases = 1000;              // grid of the stretching checks (per segment)
-constexpr int kTorqueRounds = 30;          // stretches for the torque (each one exact without friction)
+constexpr int kDynamicRounds = 30;         // rounds of the torque, torque rate and power stretches
+constexpr double kLongestSegment = 1e5;    // [s]: a power limit that needs longer is an error
 
 std::string joint_text(int j) { return "joint " + std::to_string(j + 1); }
 
@@ -38,6 +42,155 @@ struct Stretch {
     }
   }
 };
+
+// One phase u of a segment q(t) = a + s(t/T) delta, in parts whose dependence on T is known: with
+// dq1 = s'(u) delta and ddq1 = s''(u) delta (the motion at T = 1),
+//   tau(T)       = g + N / T^2 + f(dq1 / T)                      (Hollerbach 1984: N = M ddq1 + C(dq1) dq1)
+//   dtau/dt(T)   = g_u / T + N_u / T^3 + d/dt f(dq1 / T)          (_u: d/du, the phase derivative)
+//   power(T)     = sum_j max(0, tau_j(T) dq1_j / T)
+// g and N by RNEA, their phase derivatives by central differences in u; the friction part is
+// evaluated at each T (a sigmoid or Coulomb law is no power law of T).
+struct DynamicPhase {
+  Vector7 dq1, dq1_before, dq1_after;   // at u, u - h, u + h (one-sided at the ends)
+  double du = 0.0;                      // (u + h) - (u - h)
+  Vector7 g, N, g_u, N_u;
+};
+constexpr double kPhaseStep = 1e-5;      // h of the central differences in u
+
+std::vector<DynamicPhase> dynamic_phases(const Vector7& a, const Vector7& delta, const Model& model, Data& data) {
+  std::vector<DynamicPhase> phases(kPhases + 1);
+  const auto parts = [&](double u, Vector7& dq1, Vector7& g, Vector7& N) {
+    const SepticSample s = septic(u);
+    const Vector7 q = a + s.s * delta;
+    dq1 = s.ds * delta;
+    gravity_torque(model, data, q, g);
+    rnea(model, data, q, dq1, Vector7(s.dds * delta), N);
+    N -= g;
+  };
+  for (int k = 0; k <= kPhases; ++k) {
+    DynamicPhase& p = phases[static_cast<std::size_t>(k)];
+    const double u = static_cast<double>(k) / kPhases;
+    Vector7 g_before, g_after, N_before, N_after;
+    parts(u, p.dq1, p.g, p.N);
+    // One-sided at the ends (septic() clamps u to [0, 1]): there every phase derivative is zero anyway.
+    const double lo = std::max(0.0, u - kPhaseStep), hi = std::min(1.0, u + kPhaseStep);
+    parts(lo, p.dq1_before, g_before, N_before);
+    parts(hi, p.dq1_after, g_after, N_after);
+    p.du = hi - lo;
+    p.g_u = (g_after - g_before) / p.du;
+    p.N_u = (N_after - N_before) / p.du;
+  }
+  return phases;
+}
+
+Vector7 phase_torque(const DynamicPhase& p, const FrictionModel& friction, double T) {
+  return p.g + p.N / (T * T) + friction_torque(friction, p.dq1 / T);
+}
+
+// The friction's share of the torque rate at duration T (the phase derivative over T).
+Vector7 friction_rate(const DynamicPhase& p, const FrictionModel& friction, double T) {
+  return (friction_torque(friction, p.dq1_after / T) - friction_torque(friction, p.dq1_before / T)) / (p.du * T);
+}
+
+// The largest real root in (0, 1) of h(z) - target, h(z) = c1 z + c2 z^2 + c3 z^3, given h(0) = 0 and
+// |h(1)| > |target| with the sign of target (so one exists). If the solver's roots miss it
+// (rounding), the bound |h(z)| <= (|c1| + |c2| + |c3|) z on (0, 1] gives a z that is surely enough.
+double largest_root_below_one(double c1, double c2, double c3, double target) {
+  const double largest = std::max({std::abs(c1), std::abs(c2), std::abs(c3)});
+  double root = 0.0;
+  if (std::abs(c3) > 1e-12 * largest) {
+    const Eigen::PolynomialSolver<double, 3> solver(Eigen::Vector4d(-target, c1, c2, c3));
+    for (const std::complex<double>& z : solver.roots())
+      if (std::abs(z.imag()) <= 1e-9 && z.real() > 0.0 && z.real() < 1.0) root = std::max(root, z.real());
+  } else if (std::abs(c2) > 1e-12 * largest) {   // quadratic: c2 z^2 + c1 z - target = 0
+    const double discriminant = c1 * c1 + 4.0 * c2 * target;
+    if (discriminant >= 0.0)
+      for (const double sign : {-1.0, 1.0}) {
+        const double z = (-c1 + sign * std::sqrt(discriminant)) / (2.0 * c2);
+        if (z > 0.0 && z < 1.0) root = std::max(root, z);
+      }
+  } else if (c1 != 0.0) {
+    root = target / c1;
+  }
+  if (!(root > 0.0 && root < 1.0)) root = std::abs(target) / (std::abs(c1) + std::abs(c2) + std::abs(c3));
+  return root;
+}
+
+// Torque within the share of tau_max: (tau - g) scales with 1/T^2 without friction, so
+// k = max sqrt(|tau - g| / (allowed - |g|)); with friction this is approximate (the rounds repeat).
+void stretch_for_torque(const std::vector<DynamicPhase>& phases, const Model& model, const TimingLimits& fractions,
+                        int index, SegmentTiming& timing) {
+  const JointLimits& limits = model.parameters().joint_limits;
+  Stretch torque;
+  for (const DynamicPhase& p : phases) {
+    const Vector7 tau = phase_torque(p, model.parameters().friction, timing.duration);
+    for (int j = 0; j < kNumJoints; ++j) {
+      const double allowed = fractions.torque * limits.tau_max[j];
+      if (std::abs(tau[j]) <= allowed) continue;
+      if (std::abs(p.g[j]) >= allowed)
+        throw std::invalid_argument("timing: segment " + std::to_string(index) + ": " + joint_text(j) + " needs " +
+                                    std::to_string(std::abs(p.g[j])) + " N m against gravity alone, above " +
+                                    std::to_string(allowed) + " N m (the torque share of its limit)");
+      torque.consider(std::sqrt(std::abs(tau[j] - p.g[j]) / (allowed - std::abs(p.g[j]))), "torque");
+    }
+  }
+  // A hair more than the ratio, so that rounding cannot leave the same sample just above the limit.
+  if (torque.binding) timing.duration *= torque.factor * (1.0 + 1e-9), timing.binding = torque.binding;
+}
+
+// Torque rate within the share of dtau_max, in closed form per phase and joint: at T' = k T the rate
+// is h(z) = a z + c z^2 + b z^3 with z = 1/k, a = g_u/T (gravity), c = the friction part (taken as
+// 1/T^2, a viscous law's), b = N_u/T^3 (inertia). For a phase over the limit R, the smallest
+// stretch is the largest root z in (0, 1) of h(z) = sign(h(1)) R (as z falls from 1, |h| reaches R
+// first with the sign of h(1)): the real roots of a cubic (Eigen's companion-matrix solver).
+void stretch_for_torque_rate(const std::vector<DynamicPhase>& phases, const Model& model, const TimingLimits& fractions,
+                             SegmentTiming& timing) {
+  const JointLimits& limits = model.parameters().joint_limits;
+  const double T = timing.duration;
+  Stretch rate;
+  for (const DynamicPhase& p : phases) {
+    const Vector7 friction = friction_rate(p, model.parameters().friction, T);
+    for (int j = 0; j < kNumJoints; ++j) {
+      const double R = fractions.torque_rate * limits.dtau_max[j];
+      const double a = p.g_u[j] / T, b = p.N_u[j] / (T * T * T), c = friction[j];
+      const double h1 = a + b + c;
+      if (std::abs(h1) <= R) continue;
+      rate.consider(1.0 / largest_root_below_one(a, c, b, std::copysign(R, h1)), "torque rate");
+    }
+  }
+  if (rate.binding) timing.duration *= rate.factor * (1.0 + 1e-9), timing.binding = rate.binding;
+}
+
+double grid_power(const std::vector<DynamicPhase>& phases, const FrictionModel& friction, double T) {
+  double peak = 0.0;
+  for (const DynamicPhase& p : phases)
+    peak = std::max(peak, phase_torque(p, friction, T).cwiseProduct(p.dq1 / T).cwiseMax(0.0).sum());
+  return peak;
+}
+
+// Power sum_j max(0, tau_j dq_j) within the limit: its terms scale with 1/T (gravity), 1/T^3
+// (inertia) and with the friction law, and the positive parts switch joints in and out, so no
+// closed form: a monotone search on T. Doubling until the grid passes, then bisection to 1e-6 of
+// T; it assumes that the grid's peak power does not rise again above a passing T (true while
+// gravity's power, the slowest-decaying term, is not what binds; a failing T is never returned).
+void stretch_for_power(const std::vector<DynamicPhase>& phases, const Model& model, const TimingLimits& fractions,
+                       int index, SegmentTiming& timing) {
+  const FrictionModel& friction = model.parameters().friction;
+  if (grid_power(phases, friction, timing.duration) <= fractions.power) return;
+  double low = timing.duration, high = 2.0 * low;
+  while (grid_power(phases, friction, high) > fractions.power) {
+    if (high > kLongestSegment)
+      throw std::invalid_argument("timing: segment " + std::to_string(index) + ": the power stays above " +
+                                  std::to_string(fractions.power) + " W even over " + std::to_string(kLongestSegment) + " s");
+    low = high, high *= 2.0;
+  }
+  while (high - low > 1e-6 * high) {
+    const double middle = 0.5 * (low + high);
+    (grid_power(phases, friction, middle) > fractions.power ? low : high) = middle;
+  }
+  timing.duration = high;
+  timing.binding = "power";
+}
 
 // One segment's duration: the peaks, then the grid checks.
 SegmentTiming time_segment(const Vector7& a, const Vector7& b, const Model& model, Data& data,
@@ -85,35 +238,20 @@ SegmentTiming time_segment(const Vector7& a, const Vector7& b, const Model& mode
     timing.binding = stretch.binding;
   }
 
-  // Torque: tau(T) = g + (M s'' + C(s') s') delta / T^2 + friction(s' delta / T).
+  // The torque, its rate and the power, from parts computed once per phase (module comment of
+  // DynamicPhase): each stage stretches T just enough for its own limit on the grid; a stretch for
+  // one can move another (friction is no power law of T), so they repeat until a round leaves T as
+  // it is.
+  const std::vector<DynamicPhase> phases = dynamic_phases(a, delta, model, data);
   for (int round = 0;; ++round) {
-    Stretch torque;
-    for (int k = 0; k <= kPhases; ++k) {
-      const SepticSample s = septic(static_cast<double>(k) / kPhases);
-      const Vector7 q = a + s.s * delta;
-      const Vector7 dq = s.ds * delta / timing.duration;
-      const Vector7 ddq = s.dds * delta / (timing.duration * timing.duration);
-      Vector7 tau, g;
-      rnea(model, data, q, dq, ddq, tau);
-      tau += friction_torque(model.parameters().friction, dq);
-      gravity_torque(model, data, q, g);
-      for (int j = 0; j < kNumJoints; ++j) {
-        const double allowed = fractions.torque * limits.tau_max[j];
-        if (std::abs(tau[j]) <= allowed) continue;
-        if (std::abs(g[j]) >= allowed)
-          throw std::invalid_argument("timing: segment " + std::to_string(index) + ": " + joint_text(j) +
-                                      " needs " + std::to_string(std::abs(g[j])) + " N m against gravity alone, above " +
-                                      std::to_string(allowed) + " N m (the torque share of its limit)");
-        torque.consider(std::sqrt(std::abs(tau[j] - g[j]) / (allowed - std::abs(g[j]))), "torque");
-      }
-    }
-    if (!torque.binding) break;
-    if (round == kTorqueRounds)
-      throw std::invalid_argument("timing: segment " + std::to_string(index) + ": the torque does not come within " +
-                                  "its share by stretching the duration (friction at low speed)");
-    // A hair more than the ratio, so that rounding cannot leave the same sample just above the limit.
-    timing.duration *= torque.factor * (1.0 + 1e-9);
-    timing.binding = torque.binding;
+    const double before = timing.duration;
+    stretch_for_torque(phases, model, fractions, index, timing);
+    stretch_for_torque_rate(phases, model, fractions, timing);
+    stretch_for_power(phases, model, fractions, index, timing);
+    if (timing.duration == before) break;
+    if (round == kDynamicRounds)
+      throw std::invalid_argument("timing: segment " + std::to_string(index) + ": the torque, its rate and the power " +
+                                  "do not come within their limits by stretching the duration (friction at low speed)");
   }
   // Whole milliseconds: the 1 kHz log then samples every waypoint, at rest.
   timing.duration = std::ceil(timing.duration * 1000.0 - 1e-9) / 1000.0;
@@ -167,6 +305,9 @@ TimedTransfer time_transfer(const std::vector<Vector7>& waypoints, const Model& 
   check_fraction("acceleration", limits.acceleration, 1.0);
   check_fraction("jerk", limits.jerk, 1.0);
   check_fraction("torque", limits.torque, 1.0);
+  check_fraction("torque rate", limits.torque_rate, 1.0);
+  if (!(limits.power > 0.0) || !std::isfinite(limits.power))
+    throw std::invalid_argument("timing: the power limit " + std::to_string(limits.power) + " W is not > 0");
   if (!(limits.tool_speed > 0.0) || !std::isfinite(limits.tool_speed))
     throw std::invalid_argument("timing: the tool speed limit " + std::to_string(limits.tool_speed) + " m/s is not > 0");
   if (waypoints.size() < 2)

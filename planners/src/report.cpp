@@ -170,7 +170,10 @@ nlohmann::json to_json(const TrajectoryCheck& check) {
           {"tool_speed",
            {{"peak", check.peak_tool_speed}, {"t", check.t_peak_tool_speed}, {"limit", check.tool_speed_limit}}},
           {"clearance", clearance},
-          {"uncertified_motions", check.uncertified_motions}};
+          {"uncertified_motions", check.uncertified_motions},
+          {"min_clearance", {{"dense", finite_or_null(check.dense_min_clearance)},
+                             {"certified", finite_or_null(check.certified_min_clearance)},
+                             {"t_certified", check.t_certified_min}}}};
 }
 
 nlohmann::json to_json(const PlanReport& r) {
@@ -270,7 +273,9 @@ void write_report(const std::string& dir, const PlanReport& r, const Scene& scen
               ? format("| %s | %.4f | %.4f | %.3f | %s vs %s |\n", k.obstacle_class.c_str(), k.clearance, k.distance,
                        k.t, k.moving.c_str(), k.other.c_str())
               : format("| %s | (no pair) | | | |\n", k.obstacle_class.c_str());
-  md += format("\nMotions between samples not certified collision-free: %zu.\n\n", c.uncertified_motions);
+  md += format("\nMotions between samples not certified collision-free: %zu. Smallest clearance beyond the required: "
+               "%.4f m at the samples (dense, %.0f Hz), %.4f m certified between them (t = %.3f s).\n\n",
+               c.uncertified_motions, c.dense_min_clearance, c.rate_hz, c.certified_min_clearance, c.t_certified_min);
   md += "![clearance](clearance.svg)\n\n![tool path](tool_path.svg)\n\n";
   if (r.verify) {
     const EmulatorRun& v = *r.verify;

@@ -165,10 +165,16 @@ TrajectoryCheck check_trajectory(const JointLog& log, const Model& model, const 
     }
     // Between two valid samples: certified free, or refused (a collision between them, or a gap
     // too thin to prove free). Into or out of an invalid sample, the sample's failure says it.
-    if (k > 0 && smallest >= 0.0 && result.min_clearance.back() >= 0.0 && !checker.motion_is_free(log.q[k - 1], q)) {
-      ++result.uncertified_motions;
-      failures.add({"motion", 0, log.t[k - 1], row - 1, 0.0, 0.0, format("to t = %.6g s", t)}, "");
+    if (k > 0 && smallest >= 0.0 && result.min_clearance.back() >= 0.0) {
+      const double certified = checker.certified_clearance(log.q[k - 1], q);
+      if (certified < result.certified_min_clearance)
+        result.certified_min_clearance = certified, result.t_certified_min = log.t[k - 1];
+      if (certified < 0.0 && !checker.motion_is_free(log.q[k - 1], q)) {
+        ++result.uncertified_motions;
+        failures.add({"motion", 0, log.t[k - 1], row - 1, 0.0, 0.0, format("to t = %.6g s", t)}, "");
+      }
     }
+    result.dense_min_clearance = std::min(result.dense_min_clearance, smallest);
     result.t.push_back(t);
     result.min_clearance.push_back(smallest);
     dq_previous = dq;

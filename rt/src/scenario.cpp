@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -37,6 +38,24 @@ ModelOptions model_options(const Field& f, const std::string& end_effector, cons
   if (f.has("friction")) options.friction = f["friction"].text();
   if (f.has("load")) options.load = flange_load(f["load"]);
   return options;
+}
+
+// plant.link_scale: {LINK: {mass: s}}, links 1..7: link LINK's mass and its rotational inertia about
+// the CoM times s, the CoM kept (the same shape, s times as dense: physically consistent for any s > 0).
+// A change of the arm the robot's model does not know (a heavier link, issue 13's closed loop).
+void scale_links(const Field& f, ModelParameters& plant) {
+  for (const std::string& key : f.keys()) {
+    const Field link = f[key];
+    int number = 0;
+    const auto [end, error] = std::from_chars(key.data(), key.data() + key.size(), number);
+    if (error != std::errc() || end != key.data() + key.size() || number < 1 || number > kNumJoints)
+      link.fail("a link number from 1 to 7 as the key");
+    link.allow_only({"mass"});
+    const double s = positive(link["mass"]);
+    RigidBodyInertia& body = plant.links[static_cast<std::size_t>(number - 1)];
+    body.mass *= s;
+    body.inertia *= s;
+  }
 }
 
 ModelParameters build_model(const RobotConfig& robot, const ModelOptions& options, const Field& where) {
@@ -271,10 +290,11 @@ Scenario load_scenario(const std::string& path) {
   const std::string joint_limits = top.has("joint_limits") ? top["joint_limits"].text() : "";
 
   const Field plant = top["plant"];
-  plant.allow_only({"inertia", "friction", "load", "armature"});
+  plant.allow_only({"inertia", "friction", "load", "armature", "link_scale"});
   const ModelOptions plant_options = model_options(plant, end_effector, joint_limits);
   s.emulator.plant = build_model(config, plant_options, plant);
   if (!s.emulator.plant.physically_consistent) plant["inertia"].fail("a physically consistent inertial set for the plant");
+  if (plant.has("link_scale")) scale_links(plant["link_scale"], s.emulator.plant);
   if (plant.has("armature")) {
     const Field a = plant["armature"];
     a.allow_only({"values", "source"});

@@ -50,6 +50,10 @@ class ClearanceChecker {
   // clearance exceeds its bound over half the segment, the whole segment is free; otherwise bisect,
   // up to `max_depth` halvings (then: not certified).
   bool motion_is_free(const Vector7& q_a, const Vector7& q_b, int max_depth = 16);
+  // The bound motion_is_free starts from: the least clearance any state of the segment can have
+  // (every pair's clearance at the midpoint minus its reach over half the segment). >= 0: certified
+  // free without bisection; the report's certified margin along a path.
+  double certified_clearance(const Vector7& q_a, const Vector7& q_b);
 
   int num_pairs() const { return static_cast<int>(pairs_.size()); }
 

@@ -51,6 +51,13 @@ struct ExcitationOptions {
   // The task states the identification should serve; empty: whole-workspace D-optimal design.
   std::vector<JointSample> task;
   double task_weight = 1.0;           // lambda
+  // kConditionNumber: minimise condition_criterion (a smooth log kappa) instead of Phi; the task
+  // samples are then only reported on (J_t, r_t), not weighted.
+  enum class Design { kInformation, kConditionNumber };
+  Design design = Design::kInformation;
+  // The information W^T W^ of what the plan already identifies (the segments at earlier anchors,
+  // ExcitationProblem::information), added to this segment's: A = prior + P W^_1^T W^_1. Empty: none.
+  Eigen::MatrixXd prior_information;
   ExcitationLimits limits;
   ClearanceFunction clearance;        // optional
   double clearance_buffer = 0.005;    // [m] asked of the design samples on top of clearance >= 0 (motion between them)
@@ -103,8 +110,11 @@ class ExcitationProblem {
   // on a common factor until every design margin is >= 0.
   std::vector<double> random_start(unsigned index) const;
 
-  // Criteria of any trajectory over `duration` (the baselines: random series, Gaz et al.'s).
+  // Criteria of any trajectory over `duration` (the baselines: random series, Gaz et al.'s), with
+  // the prior information: those of the plan so far.
   ExcitationCriteria evaluate(const FourierSeries& series, double duration) const;
+  // W^T W^ of the trajectory's states at design_rate_hz over [0, duration) (no prior).
+  Eigen::MatrixXd information(const FourierSeries& series, double duration) const;
   // Peak limit use over [0, duration] at rate_hz.
   LimitUsage usage(const FourierSeries& series, double duration, double rate_hz = 1000.0) const;
 
@@ -119,9 +129,22 @@ class ExcitationProblem {
   Eigen::MatrixXd design_q_, design_dq_, design_ddq_, design_dddq_;
 
   JointSample design_state(const Eigen::MatrixXd& free, int k) const;
+  // Phi (or the condition criterion, options_.design) of the information A and dPhi/dA.
+  Criterion design_value(const Eigen::MatrixXd& A, double lambda) const;
   // d/dx of a quantity of sample k whose derivatives in (q, dq, ddq) are `ds` (1 x 21).
   Eigen::VectorXd chain(const Eigen::Matrix<double, 1, 3 * kNumJoints>& ds, int k) const;
 };
+
+// Excitations at several anchors (each its own rest-to-rest segment), designed one after the other:
+// anchor a's series minimises the criterion of the information of segments 1..a (sequential
+// design: the prior is what segments 1..a-1 identify), so Phi, J_t and the condition number are
+// the whole plan's. `options.anchor` and `options.prior_information` are replaced per anchor; the
+// seed is options.seed + a.
+struct MultiAnchorExcitation {
+  std::vector<ExcitationResult> segments;   // in the order of the anchors; segments[a].criteria: segments 1..a
+  ExcitationCriteria criteria;              // of all segments together
+};
+MultiAnchorExcitation solve_anchors(const Model& model, const ExcitationOptions& options, const std::vector<Vector7>& anchors);
 
 // t -> t/k: the same path k times slower, FourierSeries(f/k, a/k, b/k, q0). Without friction the
 // torque becomes tau_k = g + (tau_1 - g)/k^2 (Hollerbach 1984).

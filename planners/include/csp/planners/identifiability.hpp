@@ -94,6 +94,9 @@ struct Identifiability {
 // (e.g. the number of periods when W^ holds one period).
 Identifiability identifiability(const IdentificationModel& id, const Eigen::MatrixXd& scaled,
                                 const Eigen::MatrixXd& task_scaled, double weight = 1.0);
+// The same from the information A = W^T W^ itself (e.g. summed over the segments of a plan).
+Identifiability identifiability_of_information(const IdentificationModel& id, const Eigen::MatrixXd& information,
+                                               const Eigen::MatrixXd& task_scaled);
 
 // The design criterion Phi = -(1/p) log det(A + eps I) + lambda log J_t (lambda = 0 or no task: the
 // D-criterion alone) and dPhi/dA (p x p, symmetric; eps = 1e-9 tr(A)/p is differentiated too).
@@ -105,5 +108,14 @@ struct Criterion {
 };
 Criterion design_criterion(const Eigen::MatrixXd& A, const Eigen::MatrixXd& task_information, int task_rows,
                            double lambda);
+
+// The condition-number criterion: a smooth surrogate of log kappa(W^) = (1/2) log(lambda_max / lambda_min)
+// of A + eps I, the Schatten-norm ratio (1/(2r)) [log sum mu_i^r + log sum mu_i^-r] (mu: the
+// eigenvalues of A + eps I). It lies between log kappa and log kappa + (1/r) log p, and is smooth
+// where log kappa is not (at an eigenvalue of multiplicity > 1, where minimising the ratio of the
+// extreme eigenvalues drives them), which a gradient method such as MMA needs. Gradient dPhi/dA
+// as in design_criterion; task_criterion is left 0.
+inline constexpr int kConditionOrder = 8;   // r
+Criterion condition_criterion(const Eigen::MatrixXd& A, int order = kConditionOrder);
 
 }  // namespace csp::planners

@@ -34,6 +34,8 @@ struct TimingLimits {
   double acceleration = 0.5;   // of ddq_max
   double jerk = 0.5;           // of dddq_max
   double torque = 0.7;         // of tau_max, against RNEA (gravity included) plus the model's friction
+  double torque_rate = 0.5;    // of dtau_max, the rate of that torque (as jerk: the derivative's share)
+  double power = 80.0;         // sum_j max(0, tau_j dq_j) [W] (the emulator's power_limit_violation bound)
   double tool_speed = 0.25;    // TCP speed [m/s] (assumption: a slow approach near a patient)
 };
 
@@ -57,7 +59,7 @@ class TransferProfile {
 // What set each segment's duration.
 struct SegmentTiming {
   double duration = 0.0;   // [s], a whole number of milliseconds (the log then ends each segment at rest)
-  std::string binding;     // "velocity", "acceleration", "jerk", "torque" or "tool speed"
+  std::string binding;     // "velocity", "acceleration", "jerk", "tool speed", "torque", "torque rate" or "power"
 };
 
 struct TimedTransfer {
@@ -69,8 +71,10 @@ struct TimedTransfer {
 // sqrt(7.5132 |dq_j| / a_j), cbrt(52.5 |dq_j| / j_j)) with v, a, j the allowed fractions of dq_max,
 // ddq_max, dddq_max; then, on a grid of 1000 phases (the path does not change when T does: velocity
 // scales with 1/T, acceleration with 1/T^2), stretched for FR3's position-based velocity bounds
-// and the tool speed (exact ratios), and for the torque (tau - g scales with 1/T^2 without friction,
-// Hollerbach 1984; repeated until it passes, friction included). `model` is the robot with the
+// and the tool speed (exact ratios); for the torque (tau - g scales with 1/T^2 without friction,
+// Hollerbach 1984), its rate (gravity's part 1/T, inertia's 1/T^3: the exact smallest stretch per
+// phase is the root of a cubic) and the power (mixed terms: a monotone search on T), repeated
+// until a round passes, friction included. `model` is the robot with the
 // scene's tool (with_tool). Throws std::invalid_argument when no duration can pass: fewer than two
 // waypoints, two equal successive waypoints, gravity alone above the torque share, a position-based
 // velocity bound of zero on the way, or bad fractions.

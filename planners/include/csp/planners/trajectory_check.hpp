@@ -14,6 +14,8 @@
 //   certified motion check, so that nothing between two samples can collide unseen.
 #pragma once
 
+#include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -76,6 +78,11 @@ struct TrajectoryCheck {
   double peak_tool_speed = 0.0, t_peak_tool_speed = 0.0, tool_speed_limit = 0.0;
   std::vector<ClassClearance> clearance;   // per class of the scene, "self" included
   std::size_t uncertified_motions = 0;     // sample-to-sample motions the certified check refused
+  // The smallest clearance over the samples (dense), and the smallest certified one over the
+  // sample-to-sample motions between valid samples (ClearanceChecker::certified_clearance: what no
+  // state between two samples can go below) with the motion's start time; +inf when none.
+  double dense_min_clearance = std::numeric_limits<double>::infinity();
+  double certified_min_clearance = std::numeric_limits<double>::infinity(), t_certified_min = 0.0;
   // Per sample, for figures: time, the smallest clearance over all classes, the TCP position.
   std::vector<double> t, min_clearance;
   std::vector<Vector3> tool_position;
