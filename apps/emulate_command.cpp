@@ -92,7 +92,7 @@ int run_emulate(const EmulateArguments& args) {
   Summary summary(scenario.controller.trajectory, Vector7(emulator.state().q_d.data()));
   // A scene's task: the medical metrics (docs/medical.md) instead of the joint tracking summary.
   std::unique_ptr<rt::MedicalRecorder> medical;
-  if (scenario.scene) medical = std::make_unique<rt::MedicalRecorder>(scenario, builtin.status);
+  if (scenario.emulator.scene) medical = std::make_unique<rt::MedicalRecorder>(scenario, emulator, builtin.status);
   else if (!args.report.empty()) throw UsageError("--report: only for a scenario with a scene (configs/scenarios/medical/)");
   const uint64_t start_ms = emulator.state().time.toMSec();
   rt::LoopOptions options;

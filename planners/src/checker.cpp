@@ -23,10 +23,8 @@ Aabb shape_box(const Shape& shape) {
 
 }  // namespace
 
-ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene) : model_(model) {
-  for (const auto& c : franka_arm_capsules()) moving_.push_back({std::string(c.name), c.frame, c.capsule});
-  for (const auto& c : scene.tool.capsules) moving_.push_back({c.name, CapsuleFrame::kFlange, c.capsule});
-
+ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene)
+    : model_(model), moving_(arm_and_tool_capsules(scene.tool)) {
   for (const auto& [name, required] : scene.clearance) classes_.push_back(name);
   auto class_index = [&](const std::string& name) {
     return static_cast<int>(std::find(classes_.begin(), classes_.end(), name) - classes_.begin());

@@ -166,6 +166,12 @@ Emulator::Emulator(const EmulatorSettings& settings)
   F_T_NE_ = internal_parameters_.F_T_EE;
   PlantState& arm = plant_state_;
   arm.q = settings_.q_initial;
+  if (settings_.scene) {
+    contact_.emplace(settings_.scene, settings_.contact);
+    contact_state_ = contact_->initial_state();
+    contact_->require_clear(plant_, plant_data_, arm.q);
+  }
+  contact_state_.substeps = settings_.substeps;
   arm.dq.setZero();
   arm.ddq.setZero();
   torque_loop_.q_hold = arm.q;
@@ -471,6 +477,12 @@ LinkWrenches Emulator::external_link_wrenches(double t) {
   return wrenches;
 }
 
+// The scene's contact forces at time t and the arm's state, added to the scripted wrenches.
+void Emulator::add_contact_wrenches(double t, const LinkWrenches& scripted, LinkWrenches& total) {
+  contact_->evaluate(plant_, plant_data_, t, plant_state_.q, plant_state_.dq, contact_state_);
+  for (int i = 0; i < kNumJoints; ++i) total[i] = scripted[i] + contact_state_.link_wrenches[i];
+}
+
 // The inner torque loop and the plant, integrated with `substeps` semi-implicit (symplectic)
 // Euler steps: velocity first, then position with the new velocity. Its energy error stays
 // bounded instead of drifting (tests/test_emulator.cpp measures it and a step response). Static
@@ -480,11 +492,13 @@ void Emulator::integrate() {
   TorqueLoop& loop = torque_loop_;
   const double cycle_start = state_.time.toSec() - kDeltaT;
   const LinkWrenches f_ext = external_link_wrenches(cycle_start);
+  LinkWrenches f_total;   // with a scene: the scripted wrenches and the contacts of the substep
   if (phase_ == Phase::kBraked) {
     // Brakes closed: the links stand still and the sensors carry the static load.
     arm.dq.setZero();
     arm.ddq.setZero();
-    rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, f_ext, arm.tau_J);
+    if (contact_) add_contact_wrenches(cycle_start, f_ext, f_total);
+    rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, contact_ ? f_total : f_ext, arm.tau_J);
     return;
   }
   gravity_compensation_torque();
@@ -506,11 +520,16 @@ void Emulator::integrate() {
   const Vector7 dq_target = phase_ == Phase::kIdle ? Vector7::Zero() : motion_generator_.dq_c;
   if (cartesian) target = cartesian_impedance_target(q_target, dq_target);   // uses the mass matrix at q
 
-  const double h = kDeltaT / settings_.substeps;
+  // Stiff contact needs shorter steps (docs/contact.md); without one the configured substeps.
+  const int substeps =
+      contact_ ? contact_->required_substeps(plant_, plant_data_, arm.q, contact_state_, settings_.substeps)
+               : settings_.substeps;
+  contact_state_.substeps = substeps;
+  const double h = kDeltaT / substeps;
   const bool static_friction = (plant_.parameters().friction.breakaway.array() > 0.0).any();
   const double alpha = lowpass_factor(settings_.torque_loop_bandwidth_hz, h);
   const Vector7 q_before = arm.q;
-  for (int s = 0; s < settings_.substeps; ++s) {
+  for (int s = 0; s < substeps; ++s) {
     // The robot's controllers run faster than the FCI: impedance and braking act every substep.
     Vector7 setpoint = reception_.last_user_torque;
     if (impedance) setpoint = stiffness.cwiseProduct(q_target - arm.q) + damping.cwiseProduct(dq_target - arm.dq);
@@ -523,7 +542,8 @@ void Emulator::integrate() {
     Vector7 tau_link = loop.tau_motor - friction_torque(friction, arm.dq);
     if (settings_.extra_joint_torque)
       tau_link -= settings_.extra_joint_torque(cycle_start + s * h, arm.q, arm.dq, loop.tau_motor);
-    forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, f_ext);
+    if (contact_) add_contact_wrenches(cycle_start + s * h, f_ext, f_total);
+    forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, contact_ ? f_total : f_ext);
     if (static_friction) {
       // Static friction acts on the new velocity (implicit): a joint at rest stays exactly at rest
       // while the torque on it is below its breakaway level; its sliding level follows dq.

@@ -26,8 +26,9 @@ double max_of(const std::vector<double>& values) {
 
 }  // namespace
 
-MedicalRecorder::MedicalRecorder(const Scenario& scenario, std::shared_ptr<const MedicalStatus> status)
-    : scene_(scenario.scene), tissue_(scenario.tissue), status_(std::move(status)), controller_(scenario.controller.medical) {
+MedicalRecorder::MedicalRecorder(const Scenario& scenario, const Emulator& emulator,
+                                 std::shared_ptr<const MedicalStatus> status)
+    : emulator_(emulator), scene_(scenario.emulator.scene), tissue_(scenario.tissue), status_(std::move(status)), controller_(scenario.controller.medical) {
   if (!scene_) throw std::invalid_argument("medical metrics need a scenario with a scene");
   samples_.reserve(static_cast<std::size_t>(std::min(scenario.duration, 600.0) * 1000.0) + 1);
 }
@@ -35,7 +36,9 @@ MedicalRecorder::MedicalRecorder(const Scenario& scenario, std::shared_ptr<const
 void MedicalRecorder::add(const RobotState& state, double t) {
   Sample s;
   s.t = t;
-  s.true_force = tissue_ ? Vector3(-tissue_->force()) : Vector3::Zero();
+  s.true_force = emulator_.contact().O_F_tool.head<3>();
+  if (tissue_) s.true_force -= tissue_->force();
+  s.penetration = emulator_.contact().max_penetration;
   s.estimated_force = head3(state.O_F_ext_hat_K);
   s.tcp = Vector3(state.O_T_EE[12], state.O_T_EE[13], state.O_T_EE[14]);
   s.axis = Vector3(state.O_T_EE[8], state.O_T_EE[9], state.O_T_EE[10]);
@@ -113,6 +116,7 @@ std::vector<MedicalMetric> MedicalRecorder::metrics() const {
     out.push_back({"breakthrough time", breakthrough, "s"});
     out.push_back({"breakthrough detected at", detected, "s"});
     out.push_back({"overshoot past the bone", 1e3 * std::max(0.0, max_of(depth) - thickness), "mm"});
+    out.push_back({"bone left under the bit", tissue_ && tissue_->bone() ? 1e3 * (thickness - tissue_->bone()->removed()) : NAN, "mm"});
   }
   out.push_back({"force estimate error RMS (|O_F_ext_hat_K - true|)", rms(estimate_error), "N"});
   out.push_back({"force estimate error max", max_of(estimate_error), "N"});
@@ -122,7 +126,8 @@ std::vector<MedicalMetric> MedicalRecorder::metrics() const {
 void MedicalRecorder::write_figures(const std::string& directory) const {
   std::filesystem::create_directories(directory);
   PlotSeries true_force{"true", "#1f77b4", {}, {}}, estimated{"estimated (O_F_ext_hat_K)", "#d62728", {}, {}};
-  PlotSeries path{"path error", "#2ca02c", {}, {}}, depth{"depth", "#9467bd", {}, {}};
+  PlotSeries path{"path error", "#2ca02c", {}, {}}, depth{"depth along the task's axis", "#9467bd", {}, {}};
+  PlotSeries penetration{"scene contact penetration", "#ff7f0e", {}, {}};
   for (const Sample& s : samples_) {
     true_force.x.push_back(s.t);
     true_force.y.push_back(axial(s.true_force, s));
@@ -132,6 +137,8 @@ void MedicalRecorder::write_figures(const std::string& directory) const {
     path.y.push_back(1e3 * path_error(s));
     depth.x.push_back(s.t);
     depth.y.push_back(1e3 * s.depth);
+    penetration.x.push_back(s.t);
+    penetration.y.push_back(1e3 * s.penetration);
   }
   const std::string name = scene_->name;
   write_text_file(directory + "/force.svg",
@@ -142,7 +149,9 @@ void MedicalRecorder::write_figures(const std::string& directory) const {
                                 {{"path error vs time", "t [s]", "error [mm]", {path}, {}}}, 1));
   write_text_file(directory + "/penetration.svg",
                   render_panels(name + ": depth along the tool axis (below the skin line, burr entry, trocar)",
-                                {{"depth vs time", "t [s]", "depth [mm]", {depth}, {}}}, 1));
+                                {{"depth vs time", "t [s]", "depth [mm]", {depth}, {}},
+                                 {"penetration vs time", "t [s]", "penetration [mm]", {penetration}, {}}},
+                                1));
 }
 
 }  // namespace csp::rt

@@ -112,14 +112,36 @@ void read_medical_controller(const Field& f, const std::string& type, MedicalCon
   }
 }
 
-// tissue: the bone layer under the scene's burr hole and the trocar ring at its port.
-MedicalPlantSettings read_tissue(const Field& f) {
+// The tissue law replaces the scene contact of the obstacle named by `name` (the skull, the
+// abdomen) with the tool's working end: the tool capsule that ends nearest the TCP is exempted
+// from that obstacle in a copy of the scene.
+void exempt_tool_tip(const Field& name, std::shared_ptr<const Scene>& scene_in) {
+  auto scene = std::make_shared<Scene>(*scene_in);
+  const std::string obstacle = name.text();
+  const auto found = std::find_if(scene->obstacles.begin(), scene->obstacles.end(),
+                                  [&](const Obstacle& o) { return o.name == obstacle; });
+  if (found == scene->obstacles.end()) name.fail("the name of an obstacle of the scene " + scene->path);
+  const auto& capsules = scene->tool.capsules;
+  if (capsules.empty()) name.fail("a scene whose tool has capsules (its working end)");
+  const Vector3 tcp = scene->tool.F_T_EE.translation;
+  const auto tip = std::min_element(capsules.begin(), capsules.end(), [&](const NamedCapsule& x, const NamedCapsule& y) {
+    return (x.capsule.b - tcp).norm() < (y.capsule.b - tcp).norm();
+  });
+  found->exempt.push_back(tip->name);
+  scene_in = scene;
+}
+
+// tissue: the bone layer under the scene's burr hole and the trocar ring at its port, in the
+// plant's joint-torque hook, each replacing the scene contact of its `obstacle` with the tool's tip.
+void read_tissue(const Field& top, Scenario& s) {
+  const Field f = top["tissue"];
+  if (!s.emulator.scene) f.fail("a scene (`scene:`): the tissue sits at the scene's task");
   f.allow_only({"bone", "trocar"});
   MedicalPlantSettings settings;
   if (f.has("bone")) {
     const Field b = f["bone"];
-    b.allow_only({"thickness", "stiffness", "dissipation", "threshold_thrust", "removal_rate", "point_height",
-                  "soft_stiffness"});
+    b.allow_only({"obstacle", "thickness", "stiffness", "dissipation", "threshold_thrust", "removal_rate",
+                  "point_height", "soft_stiffness"});
     BoneLayerSettings& bone = settings.bone.emplace();
     if (b.has("thickness")) bone.thickness = positive(b["thickness"]);
     if (b.has("stiffness")) bone.stiffness = positive(b["stiffness"]);
@@ -128,11 +150,13 @@ MedicalPlantSettings read_tissue(const Field& f) {
     if (b.has("removal_rate")) bone.removal_rate = positive(b["removal_rate"]);
     if (b.has("point_height")) bone.point_height = positive(b["point_height"]);
     if (b.has("soft_stiffness")) bone.soft_stiffness = non_negative(b["soft_stiffness"]);
+    exempt_tool_tip(b["obstacle"], s.emulator.scene);
   }
   if (f.has("trocar")) {
     const Field t = f["trocar"];
-    t.allow_only({"stiffness", "damping", "port_axis"});
+    t.allow_only({"obstacle", "stiffness", "damping", "port_axis"});
     TrocarSettings& trocar = settings.trocar.emplace();
+    exempt_tool_tip(t["obstacle"], s.emulator.scene);
     if (t.has("stiffness")) trocar.stiffness = positive(t["stiffness"]);
     if (t.has("damping")) trocar.damping = non_negative(t["damping"]);
     if (t.has("port_axis")) {
@@ -140,7 +164,14 @@ MedicalPlantSettings read_tissue(const Field& f) {
       if (trocar.port_axis.norm() < 1e-9) t["port_axis"].fail("a non-zero vector");
     }
   }
-  return settings;
+  try {
+    s.tissue = std::make_shared<MedicalPlant>(s.emulator.plant, *s.emulator.scene, settings);
+  } catch (const std::invalid_argument& e) {
+    f.fail(e.what());
+  }
+  s.emulator.extra_joint_torque = [tissue = s.tissue](double t, const Vector7& q, const Vector7& dq, const Vector7&) {
+    return tissue->joint_torque(t, q, dq);
+  };
 }
 
 void read_controller(const Field& f, const Vector7& q_initial, ControllerSpec& c) {
@@ -244,6 +275,27 @@ ExternalWrench read_wrench(const Field& f) {
   return w;
 }
 
+// scene: a scene file (configs/scenes, relative to this scenario) whose tool the arm carries and
+// whose obstacles it touches (docs/contact.md); contact: the options of the contact engine.
+void read_scene(const Field& top, EmulatorSettings& s) {
+  if (top.has("end_effector") && top["end_effector"].text() != "none")
+    top["end_effector"].fail("none (or no end_effector) with a `scene`: the scene's tool is the end effector");
+  const std::filesystem::path file = top["scene"].text();
+  const std::string path = (file.is_absolute() ? file : std::filesystem::path(top.file()).parent_path() / file).string();
+  if (!std::filesystem::is_regular_file(path))
+    top["scene"].fail("the path of a scene file, relative to this scenario (`" + path + "` is not a readable file)");
+  auto scene = std::make_shared<Scene>(load_scene(path));
+  s.plant = with_tool(s.plant, scene->tool);
+  s.internal = with_tool(s.internal, scene->tool);
+  if (top.has("contact")) {
+    const Field c = top["contact"];
+    c.allow_only({"friction_velocity", "max_substeps"});
+    if (c.has("friction_velocity")) s.contact.friction_velocity = positive(c["friction_velocity"]);
+    if (c.has("max_substeps")) s.contact.max_substeps = static_cast<int>(c["max_substeps"].whole_number(1, 1000));
+  }
+  s.scene = std::move(scene);
+}
+
 }  // namespace
 
 void quintic_ramp(double t, double duration, double& r, double& dr, double& ddr) {
@@ -303,7 +355,7 @@ Scenario load_scenario(const std::string& path) {
   const Field top(root, path, "");
   top.allow_only({"name", "robot", "end_effector", "joint_limits", "plant", "robot_model", "initial_q", "duration",
                   "clock", "seed", "robot_settings", "controller", "faults", "external_wrenches",
-                  "hand", "vacuum_gripper", "scene", "tissue"});
+                  "hand", "vacuum_gripper", "scene", "contact", "tissue"});
   Scenario s;
   s.path = path;
   s.name = top["name"].text();
@@ -343,16 +395,8 @@ Scenario load_scenario(const std::string& path) {
     s.emulator.internal = build_model(config, internal_options, top);
   }
 
-  if (top.has("scene")) {
-    // The scene's tool replaces the end effector, in the plant and in the robot's model.
-    const std::filesystem::path scene = top["scene"].text();
-    const std::string scene_path = (scene.is_absolute() ? scene : std::filesystem::path(path).parent_path() / scene).string();
-    if (!std::filesystem::is_regular_file(scene_path))
-      top["scene"].fail("the path of a scene file, relative to this scenario (`" + scene_path + "` is not a readable file)");
-    s.scene = std::make_shared<const Scene>(load_scene(scene_path));
-    s.emulator.plant = with_tool(s.emulator.plant, s.scene->tool);
-    s.emulator.internal = with_tool(s.emulator.internal, s.scene->tool);
-  }
+  if (top.has("scene")) read_scene(top, s.emulator);
+  else if (top.has("contact")) top["contact"].fail("no contact options without a `scene` to touch");
 
   s.emulator.q_initial = top["initial_q"].vector<7>();
   const JointLimits& limits = s.emulator.plant.joint_limits;
@@ -373,22 +417,13 @@ Scenario load_scenario(const std::string& path) {
   }
   if (top.has("robot_settings")) read_robot_settings(top["robot_settings"], s.emulator);
   read_controller(top["controller"], s.emulator.q_initial, s.controller);
-  s.controller.medical.scene = s.scene;
-  if (is_medical_controller(s.controller.type) && !s.scene)
+  const std::shared_ptr<const Scene>& scene = s.emulator.scene;
+  s.controller.medical.scene = scene;
+  if (is_medical_controller(s.controller.type) && !scene)
     top["controller"]["type"].fail("a scene (`scene:`) for a " + s.controller.type + " controller: it follows the scene's task");
   if (s.controller.type == "drilling" && !top["controller"].has("feed_rate"))
-    if (const auto* hole = std::get_if<BurrHole>(&s.scene->task)) s.controller.medical.feed_rate = hole->speed;
-  if (top.has("tissue")) {
-    if (!s.scene) top["tissue"].fail("a scene (`scene:`): the tissue sits at the scene's task");
-    try {
-      s.tissue = std::make_shared<MedicalPlant>(s.emulator.plant, *s.scene, read_tissue(top["tissue"]));
-    } catch (const std::invalid_argument& e) {
-      top["tissue"].fail(e.what());
-    }
-    s.emulator.extra_joint_torque = [tissue = s.tissue](double t, const Vector7& q, const Vector7& dq, const Vector7&) {
-      return tissue->joint_torque(t, q, dq);
-    };
-  }
+    if (const auto* hole = std::get_if<BurrHole>(&scene->task)) s.controller.medical.feed_rate = hole->speed;
+  if (top.has("tissue")) read_tissue(top, s);
   if (top.has("faults")) read_faults(top["faults"], s);
   if (top.has("external_wrenches")) {
     const Field wrenches = top["external_wrenches"];

@@ -67,6 +67,28 @@ Shape shape(const Field& obstacle) {
   return HalfSpace{h["point"].vector<3>(), unit_vector(h["normal"])};
 }
 
+// materials: {name: {stiffness, exponent, damping, friction, source}}; the law's ranges are
+// material_problem's (csp/dynamics/contact.hpp), reported on the offending key.
+std::map<std::string, Material> materials(const Field& f) {
+  std::map<std::string, Material> out;
+  for (const auto& name : f.keys()) {
+    const Field m = f[name];
+    m.allow_only({"stiffness", "exponent", "damping", "friction", "source"});
+    require_source(m);
+    const Material material{m["stiffness"].number(), m["exponent"].number(), m["damping"].number(),
+                            m["friction"].number()};
+    if (const auto problem = material_problem(material)) m[std::string(problem->key)].fail(std::string(problem->expected));
+    out[name] = material;
+  }
+  return out;
+}
+
+ObstacleMotion motion(const Field& f) {
+  f.allow_only({"amplitude", "frequency_hz", "source"});
+  require_source(f);
+  return {f["amplitude"].vector<3>(), positive(f["frequency_hz"])};
+}
+
 Transform rotation_z_translation(double angle, const Vector3& translation) {
   Transform t;
   t.rotation = Eigen::AngleAxisd(angle, Vector3::UnitZ()).toRotationMatrix();
@@ -132,6 +154,15 @@ Task task(const Field& f) {
 
 }  // namespace
 
+Vector3 ObstacleMotion::displacement(double t) const {
+  return amplitude * std::sin(2.0 * std::numbers::pi * frequency_hz * t);
+}
+
+Vector3 ObstacleMotion::velocity(double t) const {
+  const double w = 2.0 * std::numbers::pi * frequency_hz;
+  return amplitude * (w * std::cos(w * t));
+}
+
 const NamedPose& Scene::pose(const std::string& name) const {
   for (const auto& p : poses)
     if (p.name == name) return p;
@@ -143,7 +174,7 @@ const NamedPose& Scene::pose(const std::string& name) const {
 Scene load_scene(const std::string& path) {
   const YAML::Node root = load_yaml_file(path, "scene file");
   const Field top(root, path, "");
-  top.allow_only({"name", "description", "frame", "clearance", "obstacles", "tool", "poses", "start", "task"});
+  top.allow_only({"name", "description", "frame", "clearance", "materials", "obstacles", "tool", "poses", "start", "task"});
 
   Scene scene;
   scene.path = path;
@@ -158,6 +189,7 @@ Scene load_scene(const std::string& path) {
   if (!scene.clearance.contains("self")) clearance.fail("a `self` clearance besides one per obstacle class");
 
   scene.tool = tool(top["tool"]);
+  if (top.has("materials")) scene.materials = materials(top["materials"]);
 
   // Names an exemption may refer to: the arm's capsules and the tool's.
   std::set<std::string> capsule_names;
@@ -171,9 +203,9 @@ Scene load_scene(const std::string& path) {
   std::set<std::string> obstacle_names;
   for (std::size_t i = 0; i < obstacles.sequence_size(); ++i) {
     const Field o = obstacles[i];
-    o.allow_only({"name", "class", "source", "box", "capsule", "sphere", "half_space", "exempt"});
+    o.allow_only({"name", "class", "source", "box", "capsule", "sphere", "half_space", "exempt", "material", "motion"});
     require_source(o);
-    Obstacle obstacle{o["name"].text(), o["class"].text(), shape(o), {}};
+    Obstacle obstacle{o["name"].text(), o["class"].text(), shape(o), {}, {}, {}};
     if (!obstacle_names.insert(obstacle.name).second) o["name"].fail("a name not used by another obstacle");
     if (obstacle.obstacle_class == "self" || !scene.clearance.contains(obstacle.obstacle_class))
       o["class"].fail("an obstacle class with a clearance in `clearance`");
@@ -185,6 +217,11 @@ Scene load_scene(const std::string& path) {
         obstacle.exempt.push_back(name);
       }
     }
+    if (o.has("material")) {
+      obstacle.material = o["material"].text();
+      if (!scene.materials.contains(obstacle.material)) o["material"].fail("the name of a material in `materials`");
+    }
+    if (o.has("motion")) obstacle.motion = motion(o["motion"]);
     scene.obstacles.push_back(std::move(obstacle));
   }
 
@@ -201,6 +238,13 @@ Scene load_scene(const std::string& path) {
 
   scene.task = task(top["task"]);
   return scene;
+}
+
+std::vector<FrameCapsule> arm_and_tool_capsules(const Tool& tool) {
+  std::vector<FrameCapsule> capsules;
+  for (const auto& c : franka_arm_capsules()) capsules.push_back({std::string(c.name), c.frame, c.capsule});
+  for (const auto& c : tool.capsules) capsules.push_back({c.name, CapsuleFrame::kFlange, c.capsule});
+  return capsules;
 }
 
 ModelParameters with_tool(ModelParameters parameters, const Tool& tool) {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <string_view>
 
 #include "csp/dynamics/model.hpp"
@@ -112,6 +113,14 @@ const std::array<LinkCapsule, kNumHandCapsules>& franka_hand_capsules();
 // in collision).
 constexpr int kNumArmSelfPairs = 18;
 const std::array<std::array<int, 2>, kNumArmSelfPairs>& franka_arm_self_pairs();
+
+// A named capsule on one of the arm's frames: what the planner's clearance checker and the
+// emulator's contact place by forward kinematics (the arm's, then the tool's on the flange).
+struct FrameCapsule {
+  std::string name;
+  CapsuleFrame frame;
+  Capsule local;   // in `frame`
+};
 
 // Pose of a capsule frame after forward_kinematics.
 const Transform& capsule_frame_pose(const Data& data, CapsuleFrame frame);

@@ -54,11 +54,6 @@ class ClearanceChecker {
   int num_pairs() const { return static_cast<int>(pairs_.size()); }
 
  private:
-  struct Moving {
-    std::string name;
-    CapsuleFrame frame;
-    Capsule local;
-  };
   struct Static {
     std::string name;
     std::string obstacle_class;
@@ -84,7 +79,7 @@ class ClearanceChecker {
 
   Model model_;
   Data data_;
-  std::vector<Moving> moving_;
+  std::vector<FrameCapsule> moving_;   // arm_and_tool_capsules
   std::vector<Static> statics_;
   std::vector<Pair> pairs_;
   std::vector<std::string> classes_;

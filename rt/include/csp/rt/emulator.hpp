@@ -12,6 +12,7 @@
 
 #include <array>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/rt/contact.hpp"
 #include "csp/rt/errors.hpp"
 #include "csp/rt/robot_state.hpp"
 
@@ -127,6 +129,11 @@ struct EmulatorSettings {
   Vector6 cartesian_stiffness = default_cartesian_stiffness();   // K-frame axes x y z R P Y
   std::vector<ExternalWrench> external_wrenches;
   PlantTorque extra_joint_torque;        // off by default; not settable from a scenario file
+  // The environment the arm touches (docs/contact.md): the scene's obstacles with a material push
+  // on the arm's and the tool's capsules, every substep. Null (the default): nothing to touch. The
+  // plant and internal models should carry the scene's tool (with_tool), as load_scenario does.
+  std::shared_ptr<const Scene> scene;
+  ContactOptions contact;
 };
 
 // Cumulative counts over the emulator's life.
@@ -154,6 +161,9 @@ class Emulator {
   const EmulatorSettings& settings() const { return settings_; }
   const EmulatorCounters& counters() const { return counters_; }
   bool in_motion() const { return mode_.has_value(); }
+  // What the scene does to the arm (settings().scene): the true contact wrench on the tool, the
+  // penetration, the contacts of the last substep. Nothing in contact without a scene.
+  const ContactState& contact() const { return contact_state_; }
   // Why the last reflex happened: the error names, or what the controller did wrong.
   const std::string& reflex_reason() const { return reflex_reason_; }
 
@@ -263,6 +273,7 @@ class Emulator {
                                      const Vector7& joint_damping);
   void gravity_compensation_torque();
   LinkWrenches external_link_wrenches(double t);
+  void add_contact_wrenches(double t, const LinkWrenches& scripted, LinkWrenches& total);
   void enter_reflex(const ErrorSet& errors, const std::string& reason);
 
   void rebuild_internal_model();
@@ -289,6 +300,10 @@ class Emulator {
   MotionGenerator motion_generator_;
   CommandReception reception_;
   Estimator estimator_;
+
+  // The environment
+  std::optional<SceneContact> contact_;
+  ContactState contact_state_;
 
   // Outputs
   RobotState state_;

@@ -99,7 +99,6 @@ struct Scenario {
   HandSettings hand;                   // the Franka Hand (franka::Gripper) and what it may grasp
   VacuumSettings vacuum_gripper;       // the Cobot Pump (franka::VacuumGripper)
   bool has_vacuum_gripper = false;     // the scenario mounts a Cobot Pump (a `vacuum_gripper:` section)
-  std::shared_ptr<const Scene> scene;  // `scene:` the room, the tool on the flange and the medical task
   // `tissue:` the bone under the burr and the trocar ring (docs/medical.md), already hooked into
   // emulator.extra_joint_torque: one emulator per loaded scenario (the tissue keeps its state).
   std::shared_ptr<MedicalPlant> tissue;

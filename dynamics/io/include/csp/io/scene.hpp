@@ -9,6 +9,7 @@
 #include <variant>
 #include <vector>
 
+#include "csp/dynamics/contact.hpp"
 #include "csp/dynamics/geometry.hpp"
 #include "csp/dynamics/model.hpp"
 
@@ -16,11 +17,22 @@ namespace csp {
 
 using Shape = std::variant<Box, Capsule, Sphere, HalfSpace>;
 
+// A periodic rigid motion of an obstacle (breathing): displacement amplitude sin(2 pi f t) [m].
+struct ObstacleMotion {
+  Vector3 amplitude = Vector3::Zero();   // base frame [m]
+  double frequency_hz = 0.0;
+
+  Vector3 displacement(double t) const;
+  Vector3 velocity(double t) const;
+};
+
 struct Obstacle {
   std::string name;
   std::string obstacle_class;        // a key of Scene::clearance
-  Shape shape;                       // base frame
+  Shape shape;                       // base frame, at displacement 0
   std::vector<std::string> exempt;   // arm or tool capsules never checked against it (e.g. the cart under link 0)
+  std::string material;              // a key of Scene::materials; empty: no contact (a keep-out zone)
+  ObstacleMotion motion;             // none by default (the planner plans against `shape`)
 };
 
 struct NamedCapsule {
@@ -71,6 +83,7 @@ struct Scene {
   std::string name;
   std::map<std::string, double> clearance;   // required distance per obstacle class, and "self" [m]
   std::vector<Obstacle> obstacles;
+  std::map<std::string, Material> materials; // contact laws by name (docs/contact.md)
   Tool tool;
   std::vector<NamedPose> poses;
   std::string start;                         // the name of the pose the plans start from
@@ -80,6 +93,10 @@ struct Scene {
 };
 
 Scene load_scene(const std::string& path);
+
+// The capsules that move with the arm when it carries `tool`: the arm's (franka_arm_capsules, in
+// link order), then the tool's on the flange.
+std::vector<FrameCapsule> arm_and_tool_capsules(const Tool& tool);
 
 // The robot's parameters with the scene's tool as its end effector (mass, TCP).
 ModelParameters with_tool(ModelParameters parameters, const Tool& tool);
