@@ -3,8 +3,6 @@
 //    independent oracles (libfranka's model dump and the hand data in franka_models.json, finite
 //    differences of its own poses);
 //  - wrong input exits with 2 and one line on stderr naming the problem.
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -28,16 +26,7 @@ using nlohmann::json;
 // ---------------------------------------------------------------------------------------------
 // Running csp.
 
-struct Process {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string shell_quote(const std::string& arg) {
-  std::string quoted = "'";
-  for (const char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
+using Process = ProgramRun;
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path);
@@ -46,26 +35,8 @@ std::string read_text(const std::string& path) {
   return text.str();
 }
 
-// Runs `csp args...`: stdout through the pipe, stderr through a temp file.
-Process run_csp(const std::vector<std::string>& args) {
-  static int count = 0;
-  const std::string err_path = (temp_dir() / ("stderr_" + std::to_string(count++) + ".txt")).string();
-  std::string command = shell_quote(CSP_EXECUTABLE);
-  for (const auto& arg : args) command.append(" ").append(shell_quote(arg));
-  command.append(" 2>").append(shell_quote(err_path));
-
-  Process run;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (!pipe) throw std::runtime_error("popen failed: " + command);
-  char buffer[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) run.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  run.err = read_text(err_path);
-  std::filesystem::remove(err_path);
-  return run;
-}
+// Runs `csp args...` (tests/support.hpp).
+Process run_csp(const std::vector<std::string>& args) { return run_program(CSP_EXECUTABLE, args); }
 
 std::string describe(const std::vector<std::string>& args) {
   std::string text = "csp";

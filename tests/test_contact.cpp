@@ -194,11 +194,12 @@ Vector7 pushing_torque(const Emulator& emulator, const Vector3& force) {
   return tcp_jacobian(emulator.internal_model(), q).transpose() * wrench - 5.0 * dq;
 }
 
-// Pushes with `force`, ramped in over the first 0.5 s (libfranka's torque-rate limit).
+// Pushes with `force`, ramped in over the motion's first 0.5 s (libfranka's torque-rate limit).
 void run_pushing(Emulator& emulator, const Vector3& force, int cycles) {
   if (!emulator.in_motion()) emulator.start_motion(ControlMode::kTorque);
   for (int k = 0; k < cycles && emulator.in_motion(); ++k) {
-    const Command command{pushing_torque(emulator, std::min(1.0, k / 500.0) * force), false};
+    const double ramp = std::min(1.0, static_cast<double>(emulator.counters().motion_cycles) / 500.0);
+    const Command command{pushing_torque(emulator, ramp * force), false};
     emulator.step(&command);
   }
 }
@@ -272,6 +273,274 @@ TEST(ContactEmulator, EstimatedContactWrenchMatchesTheTrueOneWithinTheModelMisma
   const Vector6 error = O_F_ext_of(emulator.state()) - emulator.contact().O_F_tool;
   EXPECT_GT(predicted.head<3>().norm(), 0.05);   // the mismatch is visible ...
   EXPECT_TRUE(near(error.head<3>(), predicted.head<3>(), 0.05 * predicted.head<3>().norm() + 0.05));   // ... and explained
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// Impacts: the arm without gravity, thrown at the surface and then left alone (zero torque, no
+// joint friction): a passive, conservative mechanism until it touches.
+
+struct Throw {
+  double v_in = 0.0, v_out = 0.0;          // the tip's normal speed before and after the first impact
+  double max_penetration = 0.0;
+  double kinetic_before = 0.0;             // when the push has ended
+  double max_kinetic_apart = 0.0;          // the largest kinetic energy while nothing touches, after the first impact
+  double max_free_flight_change = 0.0;     // |T - T_before| before the first impact: the integrator's own error
+  bool finite = true;
+  std::string reflex;
+};
+
+double kinetic_energy(const Emulator& emulator) {
+  Data data;
+  crba(emulator.plant_model(), data, q_of(emulator.state()));
+  const Vector7 dq = dq_of(emulator.state());
+  return 0.5 * dq.dot(data.mass_matrix * dq);
+}
+
+double tip_normal_velocity(const Emulator& emulator) {
+  return (tcp_jacobian(emulator.plant_model(), q_of(emulator.state())) * dq_of(emulator.state()))[2];
+}
+
+// Pushes the TCP down with up to 5 N for 0.1 s (ramped within the torque-rate limit), then sends
+// zero torque for `cycles`; the surface is far enough for the push to end before the impact.
+Throw throw_at(const Material& material, double gap, int cycles) {
+  rt::EmulatorSettings s = probe_settings(false);
+  s.scene = flat_surface(material, gap);
+  // The plant's physics, not the robot's reflexes (an impact on bone is above 100 N for a moment).
+  for (Vector7* v : {&s.collision.upper_torque_acceleration, &s.collision.upper_torque_nominal}) v->setConstant(1e6);
+  for (Vector6* v : {&s.collision.upper_force_acceleration, &s.collision.upper_force_nominal}) v->setConstant(1e6);
+  Emulator emulator(s);
+  emulator.start_motion(ControlMode::kTorque);
+  Throw t;
+  for (int k = 0; k < 100; ++k) {
+    const double ramp = std::min({1.0, k / 40.0, (100 - k) / 40.0});
+    const Command command{pushing_torque(emulator, Vector3(0, 0, -5.0 * ramp)) + 5.0 * dq_of(emulator.state()), false};
+    emulator.step(&command);
+  }
+  const Command zero{Vector7::Zero(), false};
+  for (int k = 0; k < 50; ++k) emulator.step(&zero);   // the torque loop's lag has died out
+  EXPECT_EQ(emulator.contact().active_contacts, 0);
+  t.kinetic_before = kinetic_energy(emulator);
+  bool hit = false, separated = false;
+  double previous_velocity = tip_normal_velocity(emulator);
+  for (int k = 0; k < cycles && emulator.in_motion(); ++k) {
+    emulator.step(&zero);
+    const rt::ContactState& c = emulator.contact();
+    const double T = kinetic_energy(emulator);
+    t.finite = t.finite && std::isfinite(T);
+    t.max_penetration = std::max(t.max_penetration, c.max_penetration);
+    // The impact: a contact at the end of the cycle, or one that began and ended within it (a stiff
+    // material's contact lasts less than a millisecond): the tip moves up.
+    if (!hit && (c.active_contacts > 0 || tip_normal_velocity(emulator) > 0.0)) {
+      hit = true;
+      t.v_in = -previous_velocity;
+    }
+    if (!hit) t.max_free_flight_change = std::max(t.max_free_flight_change, std::abs(T - t.kinetic_before));
+    if (hit && c.active_contacts == 0) {
+      if (!separated) t.v_out = tip_normal_velocity(emulator);
+      separated = true;
+      t.max_kinetic_apart = std::max(t.max_kinetic_apart, T);
+    }
+    previous_velocity = tip_normal_velocity(emulator);
+  }
+  t.reflex = emulator.reflex_reason();
+  return t;
+}
+
+// The first impact's rebound is Hunt-Crossley's for the impact speed (independent of the arm's
+// effective mass), within what the arm's configuration change during the short contact allows.
+// Without friction: the normal law alone.
+TEST(ContactEmulator, DroppedToolReboundsWithHuntCrossleyRestitution) {
+  for (const char* name : {"furniture", "thigh"}) {
+    Material m = shipped(name);
+    m.friction = 0.0;
+    const Throw t = throw_at(m, 0.03, 800);
+    ASSERT_GT(t.v_in, 0.05) << name;
+    ASSERT_GT(t.v_out, 0.0) << name;
+    const double e = t.v_out / t.v_in, expected = hunt_crossley_rebound_speed(m.damping, t.v_in) / t.v_in;
+    EXPECT_NEAR(e, expected, 0.03) << name << ": impact at " << t.v_in << " m/s";
+    EXPECT_LT(e, 1.0) << name;
+  }
+}
+
+// Energy never grows in passive contact, and a stiffer material never makes the integration
+// unstable at the shipped settings (the substep rule): over four decades of stiffness, from the
+// abdomen to 100 times the skull's, the arm's kinetic energy whenever nothing touches stays at most
+// its value before the impacts (plus the free flight's own integration error), and the deepest
+// penetration stays within the 1-DOF energy bound k delta^(n+1)/(n+1) <= T_before.
+TEST(ContactEmulator, EnergyNeverGrowsAndAStiffnessSweepStaysStable) {
+  for (const double stiffness : {5.3e3, 1e5, 1e7, 7.9e8, 7.9e9, 7.9e10}) {
+    const Material m{stiffness, 1.5, 0.5, 0.3};
+    const Throw t = throw_at(m, 0.03, 800);
+    ASSERT_TRUE(t.finite) << stiffness;
+    EXPECT_EQ(t.reflex, "") << stiffness;
+    ASSERT_GT(t.v_in, 0.05) << stiffness;
+    EXPECT_LE(t.max_kinetic_apart, t.kinetic_before + 2.0 * t.max_free_flight_change + 1e-9) << stiffness;
+    const double bound = std::pow((m.exponent + 1.0) * t.kinetic_before / m.stiffness, 1.0 / (m.exponent + 1.0));
+    EXPECT_LE(t.max_penetration, bound) << stiffness;
+  }
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// The robot around the contact: flags, reflexes, determinism
+
+// A controller that pushes through the table gets the robot's reflex (libfranka's names), not a
+// numerical explosion: the table holds (millimetres), the estimate crosses the user's thresholds.
+TEST(ContactEmulator, PushingThroughTheTableTripsTheReflexNotAnExplosion) {
+  rt::EmulatorSettings s = probe_settings();
+  s.collision = rt::default_collision_behavior();   // libfranka's examples: 20 N accelerating, 10 N nominal
+  s.scene = flat_surface(shipped("furniture"), 0.002);
+  Emulator emulator(s);
+  run_pushing(emulator, Vector3(0, 0, -200.0), 3000);
+  EXPECT_FALSE(emulator.in_motion());
+  const std::string reason = emulator.reflex_reason();
+  EXPECT_NE(reason.find("reflex"), std::string::npos) << reason;   // cartesian_reflex and/or joint_reflex
+  EXPECT_EQ(reason.find("diverged"), std::string::npos) << reason;
+  EXPECT_TRUE(q_of(emulator.state()).allFinite());
+  EXPECT_LT(emulator.contact().max_penetration, 1e-3);
+  // The contact flags rose before the collision: a pressing force between the user's two levels
+  // sets cartesian_contact and keeps the motion running.
+  s.collision = probe_settings().collision;
+  for (Vector6* v : {&s.collision.lower_force_acceleration, &s.collision.lower_force_nominal}) v->setConstant(5.0);
+  Emulator pressing(s);
+  run_pushing(pressing, Vector3(0, 0, -8.0), 1500);
+  ASSERT_TRUE(pressing.in_motion()) << pressing.reflex_reason();
+  EXPECT_EQ(pressing.state().cartesian_contact[2], 1.0);
+  EXPECT_EQ(pressing.state().cartesian_collision[2], 0.0);
+}
+
+// Lockstep runs with contact (a moving, breathing surface, friction, adaptive substeps) are
+// bit-for-bit reproducible.
+TEST(ContactEmulator, LockstepRunsWithContactAreBitReproducible) {
+  auto run = [] {
+    rt::EmulatorSettings s = probe_settings();
+    auto scene = std::make_shared<Scene>(*flat_surface(shipped("abdomen"), 0.002));
+    scene->obstacles[0].motion = {Vector3(0, 0, 0.004), 0.25};
+    s.scene = scene;
+    Emulator emulator(s);
+    std::vector<double> trace;
+    emulator.start_motion(ControlMode::kTorque);
+    for (int k = 0; k < 1500; ++k) {
+      const Command command{pushing_torque(emulator, std::min(1.0, k / 500.0) * Vector3(2.0, 0, -8.0)), false};
+      emulator.step(&command);
+      for (double v : emulator.state().q) trace.push_back(v);
+      for (double v : emulator.state().O_F_ext_hat_K) trace.push_back(v);
+      trace.push_back(emulator.contact().max_penetration);
+    }
+    return trace;
+  };
+  const std::vector<double> a = run(), b = run();
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0);
+}
+
+// The breathing surface lifts the probe held by a constant force: the force stays (equilibrium of
+// the law), the probe rides the surface up and down by the motion's amplitude.
+TEST(ContactEmulator, ABreathingSurfaceCarriesTheProbeAtConstantForce) {
+  rt::EmulatorSettings s = probe_settings();
+  auto scene = std::make_shared<Scene>(*flat_surface(shipped("abdomen"), 0.002));
+  scene->obstacles[0].motion = {Vector3(0, 0, 0.004), 0.25};
+  s.scene = scene;
+  Emulator emulator(s);
+  run_pushing(emulator, Vector3(0, 0, -10.0), 1000);   // t = 1 s: the surface is up 4 mm
+  ASSERT_TRUE(emulator.in_motion()) << emulator.reflex_reason();
+  const double up = emulator.state().O_T_EE[14];
+  run_pushing(emulator, Vector3(0, 0, -10.0), 2000);   // t = 3 s: down 4 mm
+  const double down = emulator.state().O_T_EE[14];
+  EXPECT_NEAR(up - down, 0.008, 0.001);
+  EXPECT_NEAR(emulator.contact().obstacle_normal_force[0], 10.0, 0.5);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const std::string path = (temp_dir() / name).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+// The shipped ultrasound scene with one replacement in its text.
+std::string edited_scene(const std::string& name, const std::string& from, const std::string& to) {
+  std::ifstream in(scene_path("ultrasound_abdomen"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return write_file(name, text.replace(at, from.size(), to));
+}
+
+std::string config_error(const std::function<void()>& load) {
+  try {
+    load();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(ContactBadInput, InvalidMaterialsNameTheFileAndKey) {
+  const std::string negative = edited_scene("negative.yaml", "stiffness: 5300", "stiffness: -5300");
+  std::string what = config_error([&] { load_scene(negative); });
+  EXPECT_NE(what.find(negative), std::string::npos) << what;
+  EXPECT_NE(what.find("materials.abdomen.stiffness"), std::string::npos) << what;
+  const std::string nan = edited_scene("nan.yaml", "damping: 1.0", "damping: .nan");
+  what = config_error([&] { load_scene(nan); });
+  EXPECT_NE(what.find("materials.abdomen.damping: expected a finite number"), std::string::npos) << what;
+  const std::string unknown = edited_scene("unknown.yaml", "material: abdomen", "material: liver");
+  what = config_error([&] { load_scene(unknown); });
+  EXPECT_NE(what.find("obstacles[4].material: expected the name of a material"), std::string::npos) << what;
+  const std::string motion = edited_scene("motion.yaml", "frequency_hz: 0.25", "frequency_hz: -0.25");
+  what = config_error([&] { load_scene(motion); });
+  EXPECT_NE(what.find("obstacles[4].motion.frequency_hz: expected a positive number"), std::string::npos) << what;
+  // Built in code: the emulator refuses it too.
+  rt::EmulatorSettings s = probe_settings();
+  auto scene = std::make_shared<Scene>(*flat_surface(shipped("abdomen"), 0.002));
+  scene->materials["surface"].friction = -1.0;
+  s.scene = scene;
+  EXPECT_THROW(Emulator{s}, std::invalid_argument);
+}
+
+TEST(ContactBadInput, PenetrationAtTheStartNamesTheObstacleAndTheCapsule) {
+  rt::EmulatorSettings s = probe_settings();
+  s.scene = flat_surface(shipped("abdomen"), -0.01);   // the surface 1 cm above the probe's tip
+  try {
+    Emulator emulator(s);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("capsule `probe` penetrates obstacle `surface`"), std::string::npos) << what;
+  }
+}
+
+// A scenario naming a scene: its tool on the plant, the contact options, and the errors of each.
+TEST(ContactBadInput, ScenarioSceneKeysAreCheckedAndMountTheTool) {
+  const std::string head = "name: x\nrobot: " + robot_file("panda") +
+                           "\nplant: {inertia: gaz2019}\ninitial_q: [0, -0.7853981633974483, 0, -2.356194490192345, 0, "
+                           "1.5707963267948966, 0.7853981633974483]\nduration: 1\ncontroller: {type: float}\n";
+  const rt::Scenario ok = rt::load_scenario(
+      write_file("ok.yaml", head + "scene: " + scene_path("ultrasound_abdomen") + "\ncontact: {friction_velocity: 0.002}\n"));
+  ASSERT_TRUE(ok.emulator.scene);
+  EXPECT_EQ(ok.emulator.plant.end_effector.mass, ultrasound_scene().tool.inertia.mass);
+  EXPECT_EQ(ok.emulator.internal.F_T_EE.translation, ultrasound_scene().tool.F_T_EE.translation);
+  EXPECT_EQ(ok.emulator.contact.friction_velocity, 0.002);
+  rt::Emulator emulator(ok.emulator);
+  EXPECT_EQ(emulator.contact().active_contacts, 0);
+
+  const std::string no_scene = write_file("no_scene.yaml", head + "contact: {max_substeps: 8}\n");
+  EXPECT_NE(config_error([&] { rt::load_scenario(no_scene); }).find("contact: expected no contact options without a `scene`"),
+            std::string::npos);
+  const std::string hand = write_file("hand.yaml", head + "end_effector: hand\nscene: " + scene_path("ultrasound_abdomen") + "\n");
+  EXPECT_NE(config_error([&] { rt::load_scenario(hand); }).find("end_effector: expected none"), std::string::npos);
+  const std::string missing = write_file("missing.yaml", head + "scene: nowhere.yaml\n");
+  EXPECT_NE(config_error([&] { rt::load_scenario(missing); }).find("scene: expected the path of a scene file"), std::string::npos);
+  // A scene without its tool: the scene file's error, naming the key.
+  std::ifstream in(scene_path("ultrasound_abdomen"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text = text.substr(0, text.find("tool:")) + text.substr(text.find("poses:"));
+  const std::string toolless = write_file("toolless.yaml", text);
+  const std::string what = config_error([&] { rt::load_scenario(write_file("toolless_scenario.yaml", head + "scene: " + toolless + "\n")); });
+  EXPECT_NE(what.find(toolless + ": tool: expected this key (missing)"), std::string::npos) << what;
 }
 
 }  // namespace

@@ -8,13 +8,19 @@
 #include <type_traits>
 #include <variant>
 
-#include "csp/rt/emulator.hpp"
+#include "csp/rt/emulator.hpp"   // kDeltaT
 
 namespace csp::rt {
 namespace {
 
 // Below this penetration the normal's direction is round-off and the force negligible [m].
 constexpr double kMinPenetration = 1e-12;
+// How far ahead the substep rule looks [s]: the state it sees is the last substep's of the cycle
+// before, up to a cycle before the end of the next one.
+constexpr double kHorizon = 2.0 * kDeltaT;
+// Pairs this close are watched for a contact within the horizon: 1 cm in 2 ms is 5 m/s, faster
+// than any point of a Panda moves (its TCP's limit is 1.7 m/s, libfranka's kMaxTranslationalVelocity) [m].
+constexpr double kLookAhead = 1e-2;
 
 // The link a capsule's frame moves with (1..7), 0 for the base.
 int link_of(CapsuleFrame frame) {
@@ -96,6 +102,7 @@ ContactState SceneContact::initial_state() const {
   ContactState state;
   state.obstacle_normal_force.assign(scene_->obstacles.size(), 0.0);
   state.contacts.resize(pairs_.size());
+  state.approaching.resize(pairs_.size());
   return state;
 }
 
@@ -118,6 +125,7 @@ void SceneContact::evaluate(const Model& plant, Data& data, double t, const Vect
   std::fill(state.obstacle_normal_force.begin(), state.obstacle_normal_force.end(), 0.0);
   state.link_wrenches = kNoLinkWrenches;
   state.active_contacts = 0;
+  state.approaching_contacts = 0;
   state.max_penetration = 0.0;
   Vector3 tool_force = Vector3::Zero(), tool_moment = Vector3::Zero();
   const Vector3 tcp = data.O_T_EE.translation;
@@ -135,16 +143,17 @@ void SceneContact::evaluate(const Model& plant, Data& data, double t, const Vect
     }
     const Obstacle& obstacle = scene_->obstacles[pair.obstacle];
     if (!std::holds_alternative<HalfSpace>(obstacle.shape) &&
-        distance_lower_bound(capsule_box, obstacle_box_[pair.obstacle]) > 0.0)
+        distance_lower_bound(capsule_box, obstacle_box_[pair.obstacle]) > kLookAhead)
       continue;
     // A moving obstacle: the capsule moved back by the obstacle's displacement meets it at rest.
     const bool moves = obstacle.motion.frequency_hz > 0.0;
     const Vector3 displacement = moves ? obstacle.motion.displacement(t) : Vector3::Zero();
     const Capsule relative = moves ? shifted(capsule, -displacement) : capsule;
     const Distance d = std::visit([&](const auto& shape) { return distance(relative, shape); }, obstacle.shape);
-    if (d.distance > -kMinPenetration) continue;
+    if (d.distance > kLookAhead || std::abs(d.distance) < kMinPenetration) continue;
 
-    ContactPoint& contact = state.contacts[state.active_contacts++];
+    const bool touching = d.distance < 0.0;
+    ContactPoint& contact = touching ? state.contacts[state.active_contacts] : state.approaching[state.approaching_contacts];
     contact.capsule = pair.capsule;
     contact.obstacle = pair.obstacle;
     contact.link = link_of(capsules_[pair.capsule].frame);
@@ -155,6 +164,13 @@ void SceneContact::evaluate(const Model& plant, Data& data, double t, const Vect
     if (moves) velocity -= obstacle.motion.velocity(t);
     const double normal_velocity = contact.normal.dot(velocity);
     contact.penetration_rate = -normal_velocity;
+    if (!touching) {   // apart: kept when it closes within the cycle
+      contact.normal_force = 0.0;
+      contact.force.setZero();
+      if (contact.penetration + contact.penetration_rate * kHorizon > 0.0) ++state.approaching_contacts;
+      continue;
+    }
+    ++state.active_contacts;
     const Material& m = *material_[pair.obstacle];
     contact.normal_force = hunt_crossley_force(m, contact.penetration, contact.penetration_rate);
     contact.force = contact.normal_force * contact.normal +
@@ -178,24 +194,27 @@ void SceneContact::evaluate(const Model& plant, Data& data, double t, const Vect
 
 int SceneContact::required_substeps(const Model& plant, Data& data, const Vector7& q, const ContactState& state,
                                     int base) const {
-  if (state.active_contacts == 0) return base;
+  if (state.active_contacts == 0 && state.approaching_contacts == 0) return base;
   forward_kinematics(plant, data, q);
   crba(plant, data, q);
   const Eigen::LLT<Matrix7> mass(data.mass_matrix);
   double omega_squared = 0.0, damping_rate = 0.0;
-  for (int i = 0; i < state.active_contacts; ++i) {
-    const ContactPoint& c = state.contacts[i];
+  for (int i = 0; i < state.active_contacts + state.approaching_contacts; ++i) {
+    const bool touching = i < state.active_contacts;
+    const ContactPoint& c = touching ? state.contacts[i] : state.approaching[i - state.active_contacts];
     // The contact's inverse effective mass, bounded above for every direction by the trace of
     // J M^-1 J^T = |L^-1 J^T|_F^2 (M = L L^T).
     const Eigen::Matrix<double, 3, kNumJoints> J = point_jacobian(data, c.link, c.point);
     double inverse_mass = 0.0;
     for (int axis = 0; axis < 3; ++axis) inverse_mass += mass.matrixL().solve(Vector7(J.row(axis).transpose())).squaredNorm();
     const Material& m = *material_[c.obstacle];
-    // Stiffness and damping where the contact may be by the end of the cycle.
-    const double depth = c.penetration + std::max(0.0, c.penetration_rate) * kDeltaT;
+    // Stiffness, damping and friction where the contact may be by the end of the cycle.
+    const double depth = c.penetration + std::max(0.0, c.penetration_rate) * kHorizon;
+    if (depth <= 0.0) continue;
     const double elastic = m.stiffness * std::pow(depth, m.exponent);
+    const double normal_force = elastic * (1.0 + 1.5 * m.damping * std::max(0.0, c.penetration_rate));
     omega_squared += hunt_crossley_stiffness(m, depth) * inverse_mass;
-    damping_rate += (1.5 * m.damping * elastic + m.friction * c.normal_force / options_.friction_velocity) * inverse_mass;
+    damping_rate += (1.5 * m.damping * elastic + m.friction * normal_force / options_.friction_velocity) * inverse_mass;
   }
   // Symplectic Euler is stable for h omega < 2 and an explicit damping for h gamma < 2: half of each.
   const double needed = kDeltaT * std::max(std::sqrt(omega_squared), damping_rate);

@@ -44,6 +44,10 @@ struct ContactState {
   int active_contacts = 0;                   // pairs in contact
   std::vector<double> obstacle_normal_force; // per scene obstacle, sum of its normal forces [N]
   std::vector<ContactPoint> contacts;        // the first active_contacts are this substep's
+  // Pairs still apart that close within a cycle at their speed (penetration < 0: minus the gap;
+  // no force): the substep rule's look-ahead.
+  int approaching_contacts = 0;
+  std::vector<ContactPoint> approaching;
   LinkWrenches link_wrenches = kNoLinkWrenches;   // on each link, link frame about its origin (f_ext)
   int substeps = 0;                          // integration substeps the cycle used
 };
