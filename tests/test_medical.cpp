@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "csp/rt/controllers.hpp"
@@ -308,6 +310,46 @@ TEST(MedicalScenarios, PivotingBelowItsTorqueThresholdsIsAJointReflex) {
   const MedicalRun r = run(s);
   ASSERT_TRUE(r.result.reflex);
   EXPECT_TRUE(r.result.errors.has(Error::joint_reflex)) << std::string(r.result.errors);
+}
+
+// --- Bad input -----------------------------------------------------------------------------------
+
+// A shipped medical scenario with `from` replaced by `to`, written where the test may write (its
+// relative paths made absolute); the error load_scenario gives, or "" if it loads.
+std::string load_error(const std::string& name, const std::string& from, const std::string& to) {
+  std::ifstream in(kMedical + name + ".yaml");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  std::string text = buffer.str();
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  for (const char* dir : {"robots", "scenes"}) {
+    const std::string relative = std::string("../../") + dir, absolute = std::string(CSP_SOURCE_DIR) + "/configs/" + dir;
+    for (auto at = text.find(relative); at != std::string::npos; at = text.find(relative)) text.replace(at, relative.size(), absolute);
+  }
+  const std::string path = testing::TempDir() + "/medical_" + name + ".yaml";
+  std::ofstream(path) << text;
+  try {
+    load_scenario(path);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MedicalBadInput, EachMistakeNamesItsKey) {
+  EXPECT_EQ(load_error("burr_hole_drilling", "thickness: 0.006", "thickness: 0.006"), "");
+  EXPECT_NE(load_error("burr_hole_drilling", "obstacle: skull", "obstacle: skul").find("tissue.bone.obstacle: expected the name of an obstacle"),
+            std::string::npos);
+  EXPECT_NE(load_error("burr_hole_drilling", "thickness: 0.006", "thickness: -0.006").find("tissue.bone.thickness: expected a positive number"),
+            std::string::npos);
+  EXPECT_NE(load_error("burr_hole_drilling", "bone: {obstacle: skull, thickness: 0.006}", "trocar: {obstacle: skull}").find("a trocar needs a scene whose task is an rcm_pivot"),
+            std::string::npos);
+  EXPECT_NE(load_error("laparoscopic_pivoting", "insertion: 0.06", "feed_rate: 0.001").find("controller.feed_rate: expected no `feed_rate` for a rcm controller"),
+            std::string::npos);
+  EXPECT_NE(load_error("ultrasound_abdomen_scan", "scene: ../../scenes/ultrasound_abdomen.yaml\n", "").find("a scene (`scene:`) for a cartesian_impedance_force controller"),
+            std::string::npos);
 }
 
 }  // namespace
