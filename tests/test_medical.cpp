@@ -236,6 +236,17 @@ MedicalRun run(const Scenario& scenario) {
   return r;
 }
 
+// setCollisionBehavior's force thresholds (contact `lower`, collision `upper`, N) below what the
+// scenario needs end it in libfranka's cartesian_reflex.
+void expect_cartesian_reflex(Scenario s, double lower, double upper) {
+  CollisionBehavior& c = s.emulator.collision;
+  c.lower_force_acceleration = c.lower_force_nominal = Vector6::Constant(lower);
+  c.upper_force_acceleration = c.upper_force_nominal = Vector6::Constant(upper);
+  const MedicalRun r = run(s);
+  ASSERT_TRUE(r.result.reflex);
+  EXPECT_TRUE(r.result.errors.has(Error::cartesian_reflex)) << std::string(r.result.errors);
+}
+
 // Drilling with breakthrough detection stops within 1.5 mm past the bone, or before it with less
 // than the point's height (1.05 mm) of bone left (docs/medical.md); without it the feed runs on
 // through the layer to the task's advance, 4 mm past the 6 mm layer.
@@ -257,36 +268,27 @@ TEST(MedicalScenarios, DrillingStopsAtBreakthroughOnlyWithDetection) {
   EXPECT_GT(blind.metric("overshoot past the bone"), 3.0);
 }
 
-// The scan at 8 N on the breathing abdomen: within 1.5 N RMS of the commanded force, no contact
+// The scans at 8 N on the breathing abdomen and on the thigh: within 1.5 N RMS of the commanded force, no contact
 // lost, the path within 2 mm; a Cartesian force threshold below the 8 N it needs: cartesian_reflex.
 TEST(MedicalScenarios, UltrasoundScanHoldsItsForceAndTripsBelowIt) {
-  Scenario s = medical_scenario("ultrasound_abdomen_scan");
-  s.duration = 7.0;
-  const MedicalRun nominal = run(s);
-  ASSERT_FALSE(nominal.result.reflex) << nominal.result.reason;
-  EXPECT_LT(nominal.metric("contact force RMS error (scan)"), 1.5);
-  EXPECT_EQ(nominal.metric("contact losses"), 0.0);
-  EXPECT_LT(nominal.metric("path error max (scan)"), 2.0);
+  for (const char* name : {"ultrasound_abdomen_scan", "doppler_thigh_scan"}) {
+    Scenario s = medical_scenario(name);
+    s.duration = 7.0;
+    const MedicalRun nominal = run(s);
+    ASSERT_FALSE(nominal.result.reflex) << name << ": " << nominal.result.reason;
+    EXPECT_LT(nominal.metric("contact force RMS error (scan)"), 1.5) << name;
+    EXPECT_EQ(nominal.metric("contact losses"), 0.0) << name;
+    EXPECT_LT(nominal.metric("path error max (scan)"), 2.0) << name;
+  }
 
   Scenario low = medical_scenario("ultrasound_abdomen_scan");
   low.duration = 7.0;
-  CollisionBehavior& c = low.emulator.collision;
-  c.lower_force_acceleration = c.lower_force_nominal = Vector6::Constant(3.0);
-  c.upper_force_acceleration = c.upper_force_nominal = Vector6::Constant(5.0);
-  const MedicalRun tripped = run(low);
-  ASSERT_TRUE(tripped.result.reflex);
-  EXPECT_TRUE(tripped.result.errors.has(Error::cartesian_reflex)) << std::string(tripped.result.errors);
+  expect_cartesian_reflex(low, 3.0, 5.0);
 }
 
 // A collision threshold on the Cartesian force below the drill's thrust: libfranka's cartesian_reflex.
 TEST(MedicalScenarios, DrillingThrustAboveTheForceThresholdIsACartesianReflex) {
-  Scenario s = medical_scenario("burr_hole_drilling");
-  CollisionBehavior& c = s.emulator.collision;
-  c.lower_force_acceleration = c.lower_force_nominal = Vector6::Constant(5.0);
-  c.upper_force_acceleration = c.upper_force_nominal = Vector6::Constant(8.0);
-  const MedicalRun r = run(s);
-  ASSERT_TRUE(r.result.reflex);
-  EXPECT_TRUE(r.result.errors.has(Error::cartesian_reflex)) << std::string(r.result.errors);
+  expect_cartesian_reflex(medical_scenario("burr_hole_drilling"), 5.0, 8.0);
 }
 
 TEST(MedicalScenarios, PivotingKeepsTheRemoteCentreOfMotion) {

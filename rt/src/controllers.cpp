@@ -56,12 +56,7 @@ class CartesianImpedance {
     forward_kinematics(c_.model, c_.data, q);
     const Transform& pose = frame_pose(c_.data, Frame::kStiffness);
     zero_jacobian(c_.data, Frame::kStiffness, jacobian_);
-    Vector6 error;
-    error.head<3>() = pose.translation - position_d_;
-    Eigen::Quaterniond orientation(pose.rotation);
-    if (orientation_d_.coeffs().dot(orientation.coeffs()) < 0.0) orientation.coeffs() = -orientation.coeffs();
-    const Eigen::Quaterniond difference(orientation.inverse() * orientation_d_);
-    error.tail<3>() = -pose.rotation * Vector3(difference.x(), difference.y(), difference.z());
+    const Vector6 error = pose_error(pose, position_d_, orientation_d_);
     Vector7 coriolis;
     coriolis_torque(c_.model, c_.data, q, dq, coriolis);
     return torque(jacobian_.transpose() * (-stiffness_ * error - damping_ * (jacobian_ * dq)) + coriolis);
