@@ -40,6 +40,12 @@ Vector3 line_offset_from(const Vector3& point, const Vector3& axis, const Vector
   return nearest - pivot;
 }
 
+Eigen::Matrix<double, 3, 7> point_jacobian(const Matrix6x7& tcp_jacobian, const Vector3& lever) {
+  Eigen::Matrix<double, 3, 7> J = tcp_jacobian.topRows<3>();
+  for (int i = 0; i < kNumJoints; ++i) J.col(i) += tcp_jacobian.col(i).tail<3>().cross(lever);
+  return J;
+}
+
 double AxisForcePI::update(double desired, double measured, double dt) {
   const double error = desired - measured;
   integral_ = std::clamp(integral_ + k_i_ * error * dt, -limit_, limit_);
@@ -203,24 +209,16 @@ class RcmController {
     const double inserted = (tip - trocar_).dot(axis);
     if (inserted > 0.0 && inserted < shaft_length_) {
       const Vector3 offset = line_offset_from(tip, axis, trocar_);
-      const Vector3 lever = (trocar_ + offset) - tip;
-      const Eigen::Matrix<double, 3, 7> point_jacobian =
-          law_.jacobian().topRows<3>() - skew(lever) * law_.jacobian().bottomRows<3>();
+      const Eigen::Matrix<double, 3, 7> shaft_point = point_jacobian(law_.jacobian(), (trocar_ + offset) - tip);
       const Matrix3 lateral = Matrix3::Identity() - axis * axis.transpose();
       const Vector3 force = -spec_.rcm_stiffness * offset -
-                            2.0 * std::sqrt(spec_.rcm_stiffness) * lateral * (point_jacobian * vector_of(state.dq));
-      tau_cmd += point_jacobian.transpose() * force;
+                            2.0 * std::sqrt(spec_.rcm_stiffness) * lateral * (shaft_point * vector_of(state.dq));
+      tau_cmd += shaft_point.transpose() * force;
     }
     return law_.limited(tau_cmd, state);
   }
 
  private:
-  static Matrix3 skew(const Vector3& v) {
-    Matrix3 m;
-    m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-    return m;
-  }
-
   MedicalControllerSpec spec_;
   ToolFrameLaw law_;
   Vector3 trocar_;
@@ -264,7 +262,7 @@ class DrillingController {
       speed = feeding ? spec_.feed_rate : spec_.approach_speed;
       if (thrust > spec_.max_thrust) speed = 0.0;
       if (depth_d_ >= hole_.advance) speed = 0.0;
-      depth_d_ = std::min(depth_d_ + speed * dt, feeding ? hole_.advance : -kFeedStart + 1e-12);
+      depth_d_ = std::min(depth_d_ + speed * dt, feeding ? hole_.advance : -kFeedStart);
       if (spec_.breakthrough_detection && feeding && detector_.update(thrust, feed_velocity, spec_.feed_rate)) {
         stopped_ = true;
         hold_ = x;

@@ -1,5 +1,7 @@
 #include "csp/rt/medical_plant.hpp"
 
+#include "csp/rt/medical_controllers.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -14,13 +16,6 @@ void require(bool ok, const std::string& what) {
 
 bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
 bool non_negative_finite(double v) { return std::isfinite(v) && v >= 0.0; }
-
-// The linear Jacobian of the tool point p (base frame) from the TCP's Jacobian: J_v + [J_w] x (p - p_EE).
-Eigen::Matrix<double, 3, 7> point_jacobian(const Matrix6x7& tcp_jacobian, const Vector3& lever) {
-  Eigen::Matrix<double, 3, 7> J = tcp_jacobian.topRows<3>();
-  for (int i = 0; i < kNumJoints; ++i) J.col(i) += tcp_jacobian.col(i).tail<3>().cross(lever);
-  return J;
-}
 
 }  // namespace
 

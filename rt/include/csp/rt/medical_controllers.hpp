@@ -42,6 +42,10 @@ Vector7 wrench_torque(const Matrix6x7& jacobian, const Vector6& wrench, const Ve
 // offset c - pivot (normal to the axis): the shaft's deviation from a remote centre of motion.
 Vector3 line_offset_from(const Vector3& point, const Vector3& axis, const Vector3& pivot);
 
+// The linear Jacobian of a point fixed to the tool at `lever` (base frame) from the TCP, given the
+// TCP's 6x7 base-frame Jacobian: J_v + J_w x lever, column by column.
+Eigen::Matrix<double, 3, 7> point_jacobian(const Matrix6x7& tcp_jacobian, const Vector3& lever);
+
 // The force PI along the tool axis (libfranka's force_control: feed-forward plus PI on the error,
 // here on the force rather than on the joint torques): F = F_d + k_p (F_d - f) + k_i int (F_d - f) dt,
 // the integral clamped to +-integral_limit (anti-windup while the probe is not yet in contact).
