@@ -12,6 +12,7 @@
 #include "csp/bridge/lcm_log.hpp"
 #include "csp/rt/controllers.hpp"
 #include "csp/rt/csv_log.hpp"
+#include "csp/rt/medical_metrics.hpp"
 
 namespace csp::cli {
 namespace {
@@ -21,6 +22,7 @@ struct EmulateArguments {
   std::optional<long long> seed;
   std::string log;
   std::string lcm_log;
+  std::string report;   // medical scenarios: the figures' directory
 };
 
 // Tracking error of q against the scenario's reference trajectory, and the largest estimated
@@ -88,6 +90,10 @@ int run_emulate(const EmulateArguments& args) {
     lcm_log = std::make_unique<bridge::EmulateLogRecorder>(args.lcm_log, scenario, emulator, builtin.mode);
 
   Summary summary(scenario.controller.trajectory, Vector7(emulator.state().q_d.data()));
+  // A scene's task: the medical metrics (docs/medical.md) instead of the joint tracking summary.
+  std::unique_ptr<rt::MedicalRecorder> medical;
+  if (scenario.emulator.scene) medical = std::make_unique<rt::MedicalRecorder>(scenario, emulator, builtin.status);
+  else if (!args.report.empty()) throw UsageError("--report: only for a scenario with a scene (configs/scenarios/medical/)");
   const uint64_t start_ms = emulator.state().time.toMSec();
   rt::LoopOptions options;
   options.clock = scenario.clock;
@@ -101,7 +107,9 @@ int run_emulate(const EmulateArguments& args) {
   options.stop = &interrupted;
   std::string write_error;
   options.observer = [&](const rt::RobotState& state, const rt::CycleInfo& cycle) {
-    summary.add(state, static_cast<double>(state.time.toMSec() - start_ms) * 1e-3);
+    const double motion_time = static_cast<double>(state.time.toMSec() - start_ms) * 1e-3;
+    if (medical) medical->add(state, motion_time);
+    else summary.add(state, motion_time);
     if (!write_error.empty()) return;
     try {
       if (log) log->write(state, cycle);
@@ -130,6 +138,14 @@ int run_emulate(const EmulateArguments& args) {
               static_cast<unsigned long long>(counters.motion_cycles), static_cast<double>(counters.motion_cycles) * 1e-3,
               static_cast<unsigned long long>(counters.lost_commands), counters.max_consecutive_lost);
   summary.print();
+  if (medical) {
+    for (const rt::MedicalMetric& m : medical->metrics())
+      std::printf("  %-50s %10.3f %s\n", m.name.c_str(), m.value, m.unit.c_str());
+    if (!args.report.empty()) {
+      medical->write_figures(args.report);
+      std::printf("  figures: %s/force.svg, path.svg, penetration.svg\n", args.report.c_str());
+    }
+  }
   for (const std::string& warning : result.timing.warnings) std::printf("  warning: %s\n", warning.c_str());
   print_percentiles("controller compute time", result.timing.controller_compute_us);
   print_percentiles("wake-up latency after deadline", result.timing.wakeup_latency_us);
@@ -167,6 +183,7 @@ Command add_emulate_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "Override the scenario's seed (sensor noise, command losses)");
   cmd->add_option("--log", args->log, "Write the per-cycle CSV log to this file");
   cmd->add_option("--lcm-log", args->lcm_log, "Record the run as an LCM log (csp replay, csp log export, lcm-spy)");
+  cmd->add_option("--report", args->report, "Medical scenarios: write force, path and penetration figures (SVG) into this directory");
   return [args] { return run_emulate(*args); };
 }
 

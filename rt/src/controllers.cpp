@@ -16,8 +16,9 @@ struct ControllerContext {
       : model(emulator.internal_model()), spec(spec), q0(vector_of(emulator.state().q_d)) {}
 
   // Advances time and evaluates the reference trajectory.
-  void advance(Duration period) {
-    time += period.toSec();
+  void advance(Duration cycle) {
+    period = cycle.toSec();
+    time += period;
     spec.trajectory->evaluate(q0, time, q_d, dq_d, ddq_d);
   }
 
@@ -25,7 +26,7 @@ struct ControllerContext {
   Data data;
   ControllerSpec spec;
   Vector7 q0;
-  double time = 0.0;
+  double time = 0.0, period = 0.0;
   Vector7 q_d, dq_d, ddq_d;
 };
 
@@ -55,12 +56,7 @@ class CartesianImpedance {
     forward_kinematics(c_.model, c_.data, q);
     const Transform& pose = frame_pose(c_.data, Frame::kStiffness);
     zero_jacobian(c_.data, Frame::kStiffness, jacobian_);
-    Vector6 error;
-    error.head<3>() = pose.translation - position_d_;
-    Eigen::Quaterniond orientation(pose.rotation);
-    if (orientation_d_.coeffs().dot(orientation.coeffs()) < 0.0) orientation.coeffs() = -orientation.coeffs();
-    const Eigen::Quaterniond difference(orientation.inverse() * orientation_d_);
-    error.tail<3>() = -pose.rotation * Vector3(difference.x(), difference.y(), difference.z());
+    const Vector6 error = pose_error(pose, position_d_, orientation_d_);
     Vector7 coriolis;
     coriolis_torque(c_.model, c_.data, q, dq, coriolis);
     return torque(jacobian_.transpose() * (-stiffness_ * error - damping_ * (jacobian_ * dq)) + coriolis);
@@ -91,6 +87,7 @@ Vector7 joint_impedance_torque(const Model& model, Data& data, const ControllerS
 }
 
 BuiltinController make_controller(const ControllerSpec& spec, const ControllerFaults& faults, const Emulator& emulator) {
+  auto status = std::make_shared<MedicalStatus>();
   auto context = std::make_shared<ControllerContext>(emulator, spec);
   std::function<Command(const RobotState&)> law;
   ControlMode mode = ControlMode::kTorque;
@@ -107,6 +104,11 @@ BuiltinController make_controller(const ControllerSpec& spec, const ControllerFa
   } else if (spec.type == "cartesian_impedance") {
     auto impedance = std::make_shared<CartesianImpedance>(*context);
     law = [context, impedance](const RobotState& s) { return (*impedance)(s); };
+  } else if (is_medical_controller(spec.type)) {
+    // The motion time the law sees is the context's, advanced before the law runs.
+    auto medical = make_medical_law(spec.type, spec.medical, spec.translational_stiffness, spec.rotational_stiffness,
+                                    context->model, context->q0, status);
+    law = [context, medical](const RobotState& s) { return torque(medical(s, context->time, context->period)); };
   } else {
     throw std::invalid_argument("unknown controller type `" + spec.type + "`");
   }
@@ -120,7 +122,7 @@ BuiltinController make_controller(const ControllerSpec& spec, const ControllerFa
       command.values[0] = std::numeric_limits<double>::quiet_NaN();
     return command;
   };
-  return {mode, controller};
+  return {mode, controller, status};
 }
 
 }  // namespace csp::rt

@@ -98,20 +98,120 @@ std::shared_ptr<const JointReference> read_trajectory(const Field& f, const Vect
   return trajectory;
 }
 
+// The medical controllers' keys (docs/medical.md); each only for the controller that uses it.
+void read_medical_controller(const Field& f, const std::string& type, MedicalControllerSpec& m) {
+  const auto only = [&](const char* key, const char* owner) {
+    if (f.has(key) && type != owner) f[key].fail(std::string("no `") + key + "` for a " + type + " controller (" + owner + " has it)");
+    return f.has(key);
+  };
+  if (only("desired_force", "cartesian_impedance_force")) m.desired_force = non_negative(f["desired_force"]);
+  if (only("force_k_p", "cartesian_impedance_force")) m.force_k_p = non_negative(f["force_k_p"]);
+  if (only("force_k_i", "cartesian_impedance_force")) m.force_k_i = non_negative(f["force_k_i"]);
+  if (only("force_integral_limit", "cartesian_impedance_force")) m.force_integral_limit = non_negative(f["force_integral_limit"]);
+  if (only("force_ramp", "cartesian_impedance_force")) m.force_ramp = positive(f["force_ramp"]);
+  if (only("axis_damping", "cartesian_impedance_force")) m.axis_damping = non_negative(f["axis_damping"]);
+  if (only("settle", "cartesian_impedance_force")) m.settle = non_negative(f["settle"]);
+  if (only("insertion", "rcm")) m.insertion = positive(f["insertion"]);
+  if (only("insertion_time", "rcm")) m.insertion_time = positive(f["insertion_time"]);
+  if (only("pivot_amplitude", "rcm")) m.pivot_amplitude = non_negative(f["pivot_amplitude"]);
+  if (only("pivot_frequency_hz", "rcm")) m.pivot_frequency_hz = non_negative(f["pivot_frequency_hz"]);
+  if (only("rcm_stiffness", "rcm")) m.rcm_stiffness = non_negative(f["rcm_stiffness"]);
+  if (only("feed_rate", "drilling")) m.feed_rate = positive(f["feed_rate"]);
+  if (only("approach_speed", "drilling")) m.approach_speed = positive(f["approach_speed"]);
+  if (only("axial_stiffness", "drilling")) m.axial_stiffness = positive(f["axial_stiffness"]);
+  if (only("max_thrust", "drilling")) m.max_thrust = positive(f["max_thrust"]);
+  if (only("breakthrough_detection", "drilling")) m.breakthrough_detection = f["breakthrough_detection"].boolean();
+  if (only("breakthrough", "drilling")) {
+    const Field b = f["breakthrough"];
+    b.allow_only({"engaged_thrust", "drop_ratio", "jump_ratio"});
+    if (b.has("engaged_thrust")) m.breakthrough.engaged_thrust = positive(b["engaged_thrust"]);
+    if (b.has("drop_ratio")) m.breakthrough.drop_ratio = positive(b["drop_ratio"]);
+    if (b.has("jump_ratio")) m.breakthrough.jump_ratio = positive(b["jump_ratio"]);
+    if (m.breakthrough.drop_ratio >= 1.0) b["drop_ratio"].fail("a ratio below 1 (of the peak thrust)");
+  }
+}
+
+// The tissue law replaces the scene contact of the obstacle named by `name` (the skull, the
+// abdomen) with the tool's working end: the tool capsule that ends nearest the TCP is exempted
+// from that obstacle in a copy of the scene.
+void exempt_tool_tip(const Field& name, std::shared_ptr<const Scene>& scene_in) {
+  auto scene = std::make_shared<Scene>(*scene_in);
+  const std::string obstacle = name.text();
+  const auto found = std::find_if(scene->obstacles.begin(), scene->obstacles.end(),
+                                  [&](const Obstacle& o) { return o.name == obstacle; });
+  if (found == scene->obstacles.end()) name.fail("the name of an obstacle of the scene " + scene->path);
+  const auto& capsules = scene->tool.capsules;
+  if (capsules.empty()) name.fail("a scene whose tool has capsules (its working end)");
+  const Vector3 tcp = scene->tool.F_T_EE.translation;
+  const auto tip = std::min_element(capsules.begin(), capsules.end(), [&](const NamedCapsule& x, const NamedCapsule& y) {
+    return (x.capsule.b - tcp).norm() < (y.capsule.b - tcp).norm();
+  });
+  found->exempt.push_back(tip->name);
+  scene_in = scene;
+}
+
+// tissue: the bone layer under the scene's burr hole and the trocar ring at its port, in the
+// plant's joint-torque hook, each replacing the scene contact of its `obstacle` with the tool's tip.
+void read_tissue(const Field& top, Scenario& s) {
+  const Field f = top["tissue"];
+  if (!s.emulator.scene) f.fail("a scene (`scene:`): the tissue sits at the scene's task");
+  f.allow_only({"bone", "trocar"});
+  MedicalPlantSettings settings;
+  if (f.has("bone")) {
+    const Field b = f["bone"];
+    b.allow_only({"obstacle", "thickness", "stiffness", "dissipation", "threshold_thrust", "removal_rate",
+                  "point_height", "soft_stiffness"});
+    BoneLayerSettings& bone = settings.bone.emplace();
+    if (b.has("thickness")) bone.thickness = positive(b["thickness"]);
+    if (b.has("stiffness")) bone.stiffness = positive(b["stiffness"]);
+    if (b.has("dissipation")) bone.dissipation = non_negative(b["dissipation"]);
+    if (b.has("threshold_thrust")) bone.threshold_thrust = non_negative(b["threshold_thrust"]);
+    if (b.has("removal_rate")) bone.removal_rate = positive(b["removal_rate"]);
+    if (b.has("point_height")) bone.point_height = positive(b["point_height"]);
+    if (b.has("soft_stiffness")) bone.soft_stiffness = non_negative(b["soft_stiffness"]);
+    exempt_tool_tip(b["obstacle"], s.emulator.scene);
+  }
+  if (f.has("trocar")) {
+    const Field t = f["trocar"];
+    t.allow_only({"obstacle", "stiffness", "damping", "port_axis"});
+    TrocarSettings& trocar = settings.trocar.emplace();
+    exempt_tool_tip(t["obstacle"], s.emulator.scene);
+    if (t.has("stiffness")) trocar.stiffness = positive(t["stiffness"]);
+    if (t.has("damping")) trocar.damping = non_negative(t["damping"]);
+    if (t.has("port_axis")) {
+      trocar.port_axis = t["port_axis"].vector<3>();
+      if (trocar.port_axis.norm() < 1e-9) t["port_axis"].fail("a non-zero vector");
+    }
+  }
+  try {
+    s.tissue = std::make_shared<MedicalPlant>(s.emulator.plant, *s.emulator.scene, settings);
+  } catch (const std::invalid_argument& e) {
+    f.fail(e.what());
+  }
+  s.emulator.extra_joint_torque = [tissue = s.tissue](double t, const Vector7& q, const Vector7& dq, const Vector7&) {
+    return tissue->joint_torque(t, q, dq);
+  };
+}
+
 void read_controller(const Field& f, const Vector7& q_initial, ControllerSpec& c) {
   f.allow_only({"type", "stiffness", "damping", "feedforward", "translational_stiffness", "rotational_stiffness",
-                "trajectory"});
+                "trajectory", "desired_force", "force_k_p", "force_k_i", "force_integral_limit", "force_ramp",
+                "axis_damping", "settle", "insertion", "insertion_time", "pivot_amplitude", "pivot_frequency_hz",
+                "rcm_stiffness", "feed_rate", "approach_speed", "axial_stiffness", "max_thrust",
+                "breakthrough_detection", "breakthrough"});
   c.type = f["type"].text();
   if (c.type != "float" && c.type != "joint_impedance" && c.type != "joint_position" &&
-      c.type != "joint_velocity" && c.type != "cartesian_impedance")
-    f["type"].fail("float, joint_impedance, joint_position, joint_velocity or cartesian_impedance");
+      c.type != "joint_velocity" && c.type != "cartesian_impedance" && !is_medical_controller(c.type))
+    f["type"].fail("float, joint_impedance, joint_position, joint_velocity, cartesian_impedance, "
+                   "cartesian_impedance_force, rcm or drilling");
+  read_medical_controller(f, c.type, c.medical);
   if (f.has("stiffness")) c.stiffness = non_negative7(f["stiffness"]);
   if (f.has("damping")) c.damping = non_negative7(f["damping"]);
   if (f.has("feedforward")) c.feedforward = f["feedforward"].boolean();
   if (f.has("translational_stiffness")) c.translational_stiffness = non_negative(f["translational_stiffness"]);
   if (f.has("rotational_stiffness")) c.rotational_stiffness = non_negative(f["rotational_stiffness"]);
   if (f.has("trajectory")) {
-    if (c.type == "float" || c.type == "cartesian_impedance")
+    if (c.type == "float" || c.type == "cartesian_impedance" || is_medical_controller(c.type))
       f["trajectory"].fail("no trajectory for a " + c.type + " controller (joint_impedance, joint_position and "
                            "joint_velocity track one)");
     c.trajectory = read_trajectory(f["trajectory"], q_initial);
@@ -274,7 +374,7 @@ Scenario load_scenario(const std::string& path) {
   const Field top(root, path, "");
   top.allow_only({"name", "robot", "end_effector", "joint_limits", "plant", "robot_model", "initial_q", "duration",
                   "clock", "seed", "robot_settings", "controller", "faults", "external_wrenches",
-                  "hand", "vacuum_gripper", "scene", "contact"});
+                  "hand", "vacuum_gripper", "scene", "contact", "tissue"});
   Scenario s;
   s.path = path;
   s.name = top["name"].text();
@@ -337,6 +437,13 @@ Scenario load_scenario(const std::string& path) {
   }
   if (top.has("robot_settings")) read_robot_settings(top["robot_settings"], s.emulator);
   read_controller(top["controller"], s.emulator.q_initial, s.controller);
+  const std::shared_ptr<const Scene>& scene = s.emulator.scene;
+  s.controller.medical.scene = scene;
+  if (is_medical_controller(s.controller.type) && !scene)
+    top["controller"]["type"].fail("a scene (`scene:`) for a " + s.controller.type + " controller: it follows the scene's task");
+  if (s.controller.type == "drilling" && !top["controller"].has("feed_rate"))
+    if (const auto* hole = std::get_if<BurrHole>(&scene->task)) s.controller.medical.feed_rate = hole->speed;
+  if (top.has("tissue")) read_tissue(top, s);
   if (top.has("faults")) read_faults(top["faults"], s);
   if (top.has("external_wrenches")) {
     const Field wrenches = top["external_wrenches"];

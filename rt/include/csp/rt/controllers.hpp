@@ -10,6 +10,7 @@ namespace csp::rt {
 struct BuiltinController {
   ControlMode mode;
   Controller controller;
+  std::shared_ptr<const MedicalStatus> status;   // what a medical controller found (breakthrough)
 };
 
 // The joint_impedance law (libfranka's joint_impedance_control example, plus the model's

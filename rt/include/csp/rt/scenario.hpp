@@ -14,6 +14,9 @@
 #include "csp/rt/emulator.hpp"
 #include "csp/rt/hand.hpp"
 #include "csp/io/joint_log.hpp"
+#include "csp/io/scene.hpp"
+#include "csp/rt/medical_controllers.hpp"
+#include "csp/rt/medical_plant.hpp"
 
 namespace csp::rt {
 
@@ -60,7 +63,8 @@ class JointLogReference final : public JointReference {
 struct ControllerSpec {
   // float (gravity-compensated, optional joint damping), joint_impedance (torque, tracks the
   // trajectory), joint_position / joint_velocity (the robot's motion generator interface),
-  // cartesian_impedance (holds the start pose of K).
+  // cartesian_impedance (holds the start pose of K); the medical controllers
+  // cartesian_impedance_force, rcm and drilling (docs/medical.md: they follow the scene's task).
   std::string type = "float";
   Vector7 stiffness = Vector7::Zero();   // joint_impedance [N m/rad]
   Vector7 damping = Vector7::Zero();     // float, joint_impedance [N m s/rad]
@@ -68,6 +72,7 @@ struct ControllerSpec {
   double translational_stiffness = 150.0, rotational_stiffness = 10.0;   // cartesian_impedance
   // joint_impedance, joint_position, joint_velocity: the reference (default: hold the start pose).
   std::shared_ptr<const JointReference> trajectory = std::make_shared<RampedSineReference>();
+  MedicalControllerSpec medical;   // cartesian_impedance_force, rcm, drilling
 };
 
 // Faults of the controller itself, at motion time [s].
@@ -94,6 +99,9 @@ struct Scenario {
   HandSettings hand;                   // the Franka Hand (franka::Gripper) and what it may grasp
   VacuumSettings vacuum_gripper;       // the Cobot Pump (franka::VacuumGripper)
   bool has_vacuum_gripper = false;     // the scenario mounts a Cobot Pump (a `vacuum_gripper:` section)
+  // `tissue:` the bone under the burr and the trocar ring (docs/medical.md), already hooked into
+  // emulator.extra_joint_torque: one emulator per loaded scenario (the tissue keeps its state).
+  std::shared_ptr<MedicalPlant> tissue;
 };
 
 Scenario load_scenario(const std::string& path);

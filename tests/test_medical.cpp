@@ -1,0 +1,358 @@
+// Issue 14's medical controllers, drilling and trocar laws, and scenarios (docs/medical.md):
+// each law against an independent reference (finite differences of the kinematics, potential
+// energy, closed-form steady states), and the shipped medical scenarios on the emulated robot.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "csp/rt/controllers.hpp"
+#include "csp/rt/medical_controllers.hpp"
+#include "csp/rt/medical_metrics.hpp"
+#include "csp/rt/medical_plant.hpp"
+#include "csp/rt/scenario.hpp"
+
+namespace csp::rt {
+namespace {
+
+const std::string kMedical = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/medical/";
+
+Scenario medical_scenario(const std::string& name) { return load_scenario(kMedical + name + ".yaml"); }
+
+// The base-frame rotation vector taking R0 to R1 (R1 = exp([w]) R0).
+Vector3 rotation_vector(const Matrix3& R0, const Matrix3& R1) {
+  const Eigen::AngleAxisd delta(R1 * R0.transpose());
+  return delta.angle() * delta.axis();
+}
+
+// --- The controllers' laws --------------------------------------------------------------------
+
+// tau = J^T F + c: the torque's virtual work tau . dq equals F's on the TCP twist, the twist taken
+// by central differences of the forward kinematics (not the library's Jacobian).
+TEST(MedicalLaws, WrenchTorqueIsTheVirtualWorkOfTheWrench) {
+  const Scenario scenario = medical_scenario("burr_hole_drilling");
+  const Model model(scenario.emulator.internal);
+  Data data;
+  const Vector7 q = scenario.emulator.q_initial;
+  forward_kinematics(model, data, q);
+  Matrix6x7 jacobian;
+  zero_jacobian(data, Frame::kEndEffector, jacobian);
+  Vector6 wrench;
+  wrench << 3.0, -2.0, 7.5, 0.4, -0.3, 0.2;
+  const Vector7 coriolis = Vector7::LinSpaced(0.1, 0.7);
+  const Vector7 tau = wrench_torque(jacobian, wrench, coriolis) - coriolis;
+  const double h = 1e-6;
+  for (int i = 0; i < kNumJoints; ++i) {
+    Vector7 plus = q, minus = q;
+    plus[i] += h;
+    minus[i] -= h;
+    forward_kinematics(model, data, plus);
+    const Transform up = frame_pose(data, Frame::kEndEffector);
+    forward_kinematics(model, data, minus);
+    const Transform down = frame_pose(data, Frame::kEndEffector);
+    const Vector3 v = (up.translation - down.translation) / (2.0 * h);
+    const Vector3 w = rotation_vector(down.rotation, up.rotation) / (2.0 * h);
+    EXPECT_NEAR(tau[i], wrench.head<3>().dot(v) + wrench.tail<3>().dot(w), 1e-6) << "joint " << i + 1;
+  }
+}
+
+// libfranka's example error: position difference, and -R vec(q^-1 q_d) = -sin(theta/2) times the
+// base-frame axis of the rotation from the pose to the desired orientation.
+TEST(MedicalLaws, PoseErrorIsTheExampleQuaternionError) {
+  Transform pose;
+  pose.rotation = Eigen::AngleAxisd(0.7, Vector3(1.0, 2.0, -0.5).normalized()).toRotationMatrix();
+  pose.translation = Vector3(0.4, -0.1, 0.3);
+  const Vector3 local_axis = Vector3(0.3, -0.2, 0.9).normalized();
+  const double theta = 0.25;
+  const Eigen::Quaterniond desired(pose.rotation * Eigen::AngleAxisd(theta, local_axis).toRotationMatrix());
+  const Vector6 e = pose_error(pose, Vector3(0.35, 0.0, 0.3), desired);
+  EXPECT_TRUE(e.head<3>().isApprox(Vector3(0.05, -0.1, 0.0), 1e-12));
+  EXPECT_TRUE(e.tail<3>().isApprox(-std::sin(theta / 2.0) * (pose.rotation * local_axis), 1e-9));
+}
+
+TEST(MedicalLaws, AxisSplitGainsActAlongAndNormalToTheAxis) {
+  const Vector3 n = Vector3(1.0, -1.0, 2.0).normalized();
+  const Matrix6 K = axis_split_gains(n, 2000.0, 300.0, 50.0);
+  const Vector3 normal = n.unitOrthogonal();
+  Vector6 along, across, turn;
+  along << n, Vector3::Zero();
+  across << normal, Vector3::Zero();
+  turn << Vector3::Zero(), Vector3::UnitY();
+  EXPECT_TRUE((K * along).isApprox(300.0 * along, 1e-12));
+  EXPECT_TRUE((K * across).isApprox(2000.0 * across, 1e-12));
+  EXPECT_TRUE((K * turn).isApprox(50.0 * turn, 1e-12));
+  EXPECT_TRUE((critical_damping(n, 400.0, 100.0, 25.0) * along).isApprox(20.0 * along, 1e-12));
+}
+
+TEST(MedicalLaws, LineOffsetIsTheShaftsDistanceFromThePivot) {
+  const Vector3 axis = Vector3(0.0, 0.6, -0.8);
+  const Vector3 pivot(0.5, 0.0, 0.25), normal(1.0, 0.0, 0.0);
+  // A shaft through pivot + 3 mm along the normal, seen from two points on it.
+  for (double s : {-0.1, 0.05}) {
+    const Vector3 offset = line_offset_from(pivot + 0.003 * normal + s * axis, axis, pivot);
+    EXPECT_TRUE(offset.isApprox(0.003 * normal, 1e-12));
+  }
+}
+
+// On a static contact whose measured force is a fraction g of the command, the PI settles at the
+// desired force (the integral takes up the rest); its integral stays inside the clamp.
+TEST(MedicalLaws, ForcePISettlesOnTheDesiredForceAndClampsItsIntegral) {
+  AxisForcePI pi(1.0, 2.0, 5.0);
+  double command = 0.0;
+  for (int k = 0; k < 20000; ++k) command = pi.update(8.0, 0.8 * command, 1e-3);
+  EXPECT_NEAR(0.8 * command, 8.0, 1e-6);
+  AxisForcePI free_space(1.0, 2.0, 5.0);
+  for (int k = 0; k < 20000; ++k) command = free_space.update(8.0, 0.0, 1e-3);   // no contact: winds up
+  EXPECT_DOUBLE_EQ(command, 8.0 + 8.0 + 5.0);
+}
+
+TEST(MedicalLaws, BreakthroughIsAThrustDropAfterEngagementOrAFeedJump) {
+  BreakthroughDetector drop({8.0, 0.5, 4.0});
+  EXPECT_FALSE(drop.update(3.0, 0.0, 0.001));    // approach: not engaged, a low thrust means nothing
+  EXPECT_FALSE(drop.update(0.0, 0.0, 0.001));
+  EXPECT_FALSE(drop.update(15.0, 0.001, 0.001)); // cutting
+  EXPECT_FALSE(drop.update(7.6, 0.001, 0.001));  // above half the peak
+  EXPECT_TRUE(drop.update(7.4, 0.001, 0.001));   // below it
+  EXPECT_TRUE(drop.update(20.0, 0.0, 0.001));    // stays detected
+  BreakthroughDetector jump({8.0, 0.5, 4.0});
+  EXPECT_FALSE(jump.update(15.0, 0.0035, 0.001));
+  EXPECT_TRUE(jump.update(15.0, 0.0041, 0.001));
+}
+
+// --- The drilling law ---------------------------------------------------------------------------
+
+// Pushed at constant feed v, the bone's steady thrust is the inverse of the removal law,
+// f = f_0 + v / c; breakthrough comes after T / v; over the last point height the thrust falls
+// linearly; past the layer only the soft tissue pushes.
+TEST(DrillingLaw, SteadyThrustBreakthroughTimeAndExit) {
+  BoneLayerSettings settings;
+  settings.dissipation = 0.0;
+  BoneLayer bone(settings);
+  const double v = 0.001, dt = 1e-4;
+  double t = 0.0, thrust = 0.0, thrust_at_half = 0.0, thrust_in_exit = 0.0, removed_in_exit = 0.0;
+  while (!bone.broken_through() && t < 20.0) {
+    thrust = bone.step(v * t, v, dt);
+    t += dt;
+    if (std::abs(bone.removed() - 0.5 * settings.thickness) < 1e-6) thrust_at_half = thrust;
+    const double left = settings.thickness - bone.removed();
+    if (thrust_in_exit == 0.0 && left < 0.5 * settings.point_height) {
+      thrust_in_exit = thrust;
+      removed_in_exit = bone.removed();
+    }
+  }
+  const double steady = settings.threshold_thrust + v / settings.removal_rate;   // 15 N
+  EXPECT_NEAR(thrust_at_half, steady, 0.01 * steady);
+  // The tip leads the face by f / k: breakthrough at (T + f / k) / v.
+  EXPECT_NEAR(t, (settings.thickness + steady / settings.stiffness) / v, 0.01);
+  EXPECT_NEAR(thrust_in_exit, steady * (settings.thickness - removed_in_exit) / settings.point_height, 0.02 * steady);
+  const double soft = bone.step(settings.thickness + 0.002, v, dt);
+  EXPECT_DOUBLE_EQ(soft, settings.soft_stiffness * 0.002);
+}
+
+TEST(DrillingLaw, NoThrustAboveTheBoneAndNoCutBelowTheThreshold) {
+  BoneLayer bone(BoneLayerSettings{});
+  EXPECT_EQ(bone.step(-0.001, 0.001, 1e-3), 0.0);
+  const double f = bone.step(4.0 / 2.0e5, 0.0, 1.0);   // 4 N < f_0 = 5 N for a whole second
+  EXPECT_NEAR(f, 4.0, 1e-9);
+  EXPECT_EQ(bone.removed(), 0.0);
+  EXPECT_EQ(bone.step(1e-5, -3.0, 1e-3), 0.0);   // withdrawing faster than 1 / alpha: Hunt-Crossley never pulls
+}
+
+TEST(DrillingLaw, BadNumbersAreRefused) {
+  BoneLayerSettings bad;
+  bad.thickness = -0.006;
+  EXPECT_THROW(BoneLayer{bad}, std::invalid_argument);
+  bad = BoneLayerSettings{};
+  bad.removal_rate = std::nan("");
+  EXPECT_THROW(BoneLayer{bad}, std::invalid_argument);
+}
+
+// The tissue's joint torque at rest is the gradient of its potential: the trocar ring's
+// U = k e^2 / 2 (e the shaft's offset in the wall), by central differences in q.
+TEST(MedicalPlantTest, TrocarTorqueIsThePotentialsGradient) {
+  const Scenario scenario = medical_scenario("laparoscopic_pivoting");
+  MedicalPlantSettings settings;
+  settings.trocar = TrocarSettings{};
+  MedicalPlant plant(scenario.emulator.plant, *scenario.emulator.scene, settings);
+  // A pose with the shaft through the wall, 4 mm off the trocar.
+  const auto& pivot = std::get<RcmPivot>(scenario.emulator.scene->task);
+  Model model(scenario.emulator.plant);
+  Data data;
+  Vector7 q = scenario.emulator.q_initial;
+  forward_kinematics(model, data, q);
+  const Matrix3 vertical = frame_pose(data, Frame::kEndEffector).rotation;   // the shaft along -z
+  for (int k = 0; k < 200; ++k) {   // resolved rate: the tip 6 cm below the trocar and 4 mm aside, shaft vertical
+    forward_kinematics(model, data, q);
+    Matrix6x7 J;
+    zero_jacobian(data, Frame::kEndEffector, J);
+    const Transform& tcp = frame_pose(data, Frame::kEndEffector);
+    Vector6 error;
+    error << pivot.trocar + Vector3(0.004, 0.0, -0.06) - tcp.translation, rotation_vector(tcp.rotation, vertical);
+    q += J.transpose() * (J * J.transpose()).ldlt().solve(error);
+  }
+  const Vector7 tau = plant.joint_torque(0.0, q, Vector7::Zero());
+  ASSERT_NEAR(plant.trocar_offset(), 0.004, 1e-3);
+  const double k = settings.trocar->stiffness, h = 1e-6;
+  for (int i = 0; i < kNumJoints; ++i) {
+    Vector7 plus = q, minus = q;
+    plus[i] += h;
+    minus[i] -= h;
+    plant.joint_torque(0.0, plus, Vector7::Zero());
+    const double up = 0.5 * k * plant.trocar_offset() * plant.trocar_offset();
+    plant.joint_torque(0.0, minus, Vector7::Zero());
+    const double down = 0.5 * k * plant.trocar_offset() * plant.trocar_offset();
+    EXPECT_NEAR(tau[i], (up - down) / (2.0 * h), 1e-5) << "joint " << i + 1;
+  }
+}
+
+// --- The scenarios ------------------------------------------------------------------------------
+
+struct MedicalRun {
+  MotionResult result;
+  std::vector<MedicalMetric> metrics;
+  double metric(const std::string& name) const {
+    for (const MedicalMetric& m : metrics)
+      if (m.name == name) return m.value;
+    ADD_FAILURE() << "no metric " << name;
+    return NAN;
+  }
+};
+
+MedicalRun run(const Scenario& scenario) {
+  Emulator emulator(scenario.emulator);
+  const BuiltinController builtin = make_controller(scenario.controller, scenario.controller_faults, emulator);
+  MedicalRecorder recorder(scenario, emulator, builtin.status);
+  const uint64_t start_ms = emulator.state().time.toMSec();
+  LoopOptions options;
+  options.max_duration = scenario.duration;
+  options.observer = [&](const RobotState& state, const CycleInfo&) {
+    recorder.add(state, static_cast<double>(state.time.toMSec() - start_ms) * 1e-3);
+  };
+  MedicalRun r;
+  r.result = run_motion(emulator, builtin.mode, builtin.controller, options);
+  r.metrics = recorder.metrics();
+  return r;
+}
+
+// setCollisionBehavior's force thresholds (contact `lower`, collision `upper`, N) below what the
+// scenario needs end it in libfranka's cartesian_reflex.
+void expect_cartesian_reflex(Scenario s, double lower, double upper) {
+  CollisionBehavior& c = s.emulator.collision;
+  c.lower_force_acceleration = c.lower_force_nominal = Vector6::Constant(lower);
+  c.upper_force_acceleration = c.upper_force_nominal = Vector6::Constant(upper);
+  const MedicalRun r = run(s);
+  ASSERT_TRUE(r.result.reflex);
+  EXPECT_TRUE(r.result.errors.has(Error::cartesian_reflex)) << std::string(r.result.errors);
+}
+
+// Drilling with breakthrough detection stops within 1.5 mm past the bone, or before it with less
+// than the point's height (1.05 mm) of bone left (docs/medical.md); without it the feed runs on
+// through the layer to the task's advance, 4 mm past the 6 mm layer.
+TEST(MedicalScenarios, DrillingStopsAtBreakthroughOnlyWithDetection) {
+  Scenario on = medical_scenario("burr_hole_drilling");
+  const MedicalRun detected = run(on);
+  ASSERT_FALSE(detected.result.reflex) << detected.result.reason;
+  EXPECT_TRUE(std::isfinite(detected.metric("breakthrough detected at")));
+  EXPECT_LT(detected.metric("overshoot past the bone"), 1.5);
+  EXPECT_LT(detected.metric("bone left under the bit"), 1.05);
+  EXPECT_GT(detected.metric("thrust max"), 10.0);
+
+  Scenario off = medical_scenario("burr_hole_drilling");
+  off.controller.medical.breakthrough_detection = false;
+  const MedicalRun blind = run(off);
+  ASSERT_FALSE(blind.result.reflex) << blind.result.reason;
+  EXPECT_TRUE(std::isnan(blind.metric("breakthrough detected at")));
+  EXPECT_TRUE(std::isfinite(blind.metric("breakthrough time")));
+  EXPECT_GT(blind.metric("overshoot past the bone"), 3.0);
+}
+
+// The scans at 8 N on the breathing abdomen and on the thigh: within 1.5 N RMS of the commanded force, no contact
+// lost, the path within 2 mm; a Cartesian force threshold below the 8 N it needs: cartesian_reflex.
+TEST(MedicalScenarios, UltrasoundScanHoldsItsForceAndTripsBelowIt) {
+  for (const char* name : {"ultrasound_abdomen_scan", "doppler_thigh_scan"}) {
+    Scenario s = medical_scenario(name);
+    s.duration = 7.0;
+    const MedicalRun nominal = run(s);
+    ASSERT_FALSE(nominal.result.reflex) << name << ": " << nominal.result.reason;
+    EXPECT_LT(nominal.metric("contact force RMS error (scan)"), 1.5) << name;
+    EXPECT_EQ(nominal.metric("contact losses"), 0.0) << name;
+    EXPECT_LT(nominal.metric("path error max (scan)"), 2.0) << name;
+  }
+
+  Scenario low = medical_scenario("ultrasound_abdomen_scan");
+  low.duration = 7.0;
+  expect_cartesian_reflex(low, 3.0, 5.0);
+}
+
+// A collision threshold on the Cartesian force below the drill's thrust: libfranka's cartesian_reflex.
+TEST(MedicalScenarios, DrillingThrustAboveTheForceThresholdIsACartesianReflex) {
+  expect_cartesian_reflex(medical_scenario("burr_hole_drilling"), 5.0, 8.0);
+}
+
+TEST(MedicalScenarios, PivotingKeepsTheRemoteCentreOfMotion) {
+  Scenario s = medical_scenario("laparoscopic_pivoting");
+  s.duration = 6.0;
+  const MedicalRun r = run(s);
+  ASSERT_FALSE(r.result.reflex) << r.result.reason;
+  EXPECT_LT(r.metric("RCM deviation max"), 3.0);
+  // The ring's force is its stiffness times the deviation.
+  EXPECT_NEAR(r.metric("trocar force max"), 1000.0 * 1e-3 * r.metric("RCM deviation max"), 1.0);
+}
+
+// The same pivot with joint torque thresholds below what it needs (0.2 N m: less than the estimated
+// external torques the model mismatch and the trocar give from the start): joint_reflex.
+TEST(MedicalScenarios, PivotingBelowItsTorqueThresholdsIsAJointReflex) {
+  Scenario s = medical_scenario("laparoscopic_pivoting");
+  s.duration = 6.0;
+  CollisionBehavior& c = s.emulator.collision;
+  c.lower_torque_acceleration = c.lower_torque_nominal = Vector7::Constant(0.1);
+  c.upper_torque_acceleration = c.upper_torque_nominal = Vector7::Constant(0.2);
+  const MedicalRun r = run(s);
+  ASSERT_TRUE(r.result.reflex);
+  EXPECT_TRUE(r.result.errors.has(Error::joint_reflex)) << std::string(r.result.errors);
+}
+
+// --- Bad input -----------------------------------------------------------------------------------
+
+// A shipped medical scenario with `from` replaced by `to`, written where the test may write (its
+// relative paths made absolute); the error load_scenario gives, or "" if it loads.
+std::string load_error(const std::string& name, const std::string& from, const std::string& to) {
+  std::ifstream in(kMedical + name + ".yaml");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  std::string text = buffer.str();
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  for (const char* dir : {"robots", "scenes"}) {
+    const std::string relative = std::string("../../") + dir, absolute = std::string(CSP_SOURCE_DIR) + "/configs/" + dir;
+    for (auto at = text.find(relative); at != std::string::npos; at = text.find(relative)) text.replace(at, relative.size(), absolute);
+  }
+  const std::string path = testing::TempDir() + "/medical_" + name + ".yaml";
+  std::ofstream(path) << text;
+  try {
+    load_scenario(path);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MedicalBadInput, EachMistakeNamesItsKey) {
+  EXPECT_EQ(load_error("burr_hole_drilling", "thickness: 0.006", "thickness: 0.006"), "");
+  EXPECT_NE(load_error("burr_hole_drilling", "obstacle: skull", "obstacle: skul").find("tissue.bone.obstacle: expected the name of an obstacle"),
+            std::string::npos);
+  EXPECT_NE(load_error("burr_hole_drilling", "thickness: 0.006", "thickness: -0.006").find("tissue.bone.thickness: expected a positive number"),
+            std::string::npos);
+  EXPECT_NE(load_error("burr_hole_drilling", "bone: {obstacle: skull, thickness: 0.006}", "trocar: {obstacle: skull}").find("a trocar needs a scene whose task is an rcm_pivot"),
+            std::string::npos);
+  EXPECT_NE(load_error("laparoscopic_pivoting", "insertion: 0.06", "feed_rate: 0.001").find("controller.feed_rate: expected no `feed_rate` for a rcm controller"),
+            std::string::npos);
+  EXPECT_NE(load_error("ultrasound_abdomen_scan", "scene: ../../scenes/ultrasound_abdomen.yaml\n", "").find("a scene (`scene:`) for a cartesian_impedance_force controller"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace csp::rt
