@@ -450,6 +450,35 @@ TEST(PropertiesJacobian, ZeroJacobianIsFiniteDifferenceOfPoseForAllFrames) {
   }
 }
 
+// point_jacobian's column j is the velocity of a point riding on link `link` for dq = e_j: the
+// central difference of the point carried by the link's frame (fixed in it at q), joints past the
+// link moving it not at all. Same step and bound as above.
+TEST(PropertiesJacobian, PointJacobianIsFiniteDifferenceOfACarriedPoint) {
+  constexpr double h = 1e-6;
+  for (const Arm& arm : physical_arms()) {
+    SCOPED_TRACE(arm.name);
+    Data data;
+    for (const State& s : random_states(arm.model)) {
+      forward_kinematics(arm.model, data, s.q);
+      for (int link = 1; link <= kNumJoints; ++link) {
+        const Transform& frame = data.O_T_joint[link - 1];
+        const Vector3 point = frame.translation + frame.rotation * Vector3(0.05, -0.03, 0.11);   // any point on the link
+        const Vector3 local = frame.rotation.transpose() * (point - frame.translation);
+        auto carried = [&](const Vector7& q) {
+          Data moved;
+          forward_kinematics(arm.model, moved, q);
+          const Transform& f = moved.O_T_joint[link - 1];
+          return Vector3(f.translation + f.rotation * local);
+        };
+        Matrix3x7 fd;
+        for (int j = 0; j < kNumJoints; ++j)
+          fd.col(j) = (carried(s.q + h * Vector7::Unit(j)) - carried(s.q - h * Vector7::Unit(j))) / (2.0 * h);
+        ASSERT_TRUE(near_rel(point_jacobian(data, link, point), fd, 1e-8)) << "link " << link;
+      }
+    }
+  }
+}
+
 // The body Jacobian is the zero Jacobian with both row blocks expressed in the frame itself.
 TEST(PropertiesJacobian, BodyJacobianIsRotatedZeroJacobian) {
   for (const Arm& arm : physical_arms()) {

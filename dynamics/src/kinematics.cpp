@@ -48,6 +48,12 @@ void zero_jacobian(const Data& data, Frame frame, Matrix6x7& jacobian) {
   }
 }
 
+Matrix3x7 point_jacobian(const Data& data, int link, const Vector3& point) {
+  Matrix3x7 jacobian = Matrix3x7::Zero();
+  for (int j = 0; j < link; ++j) jacobian.col(j) = data.axis[j].head<3>() + data.axis[j].tail<3>().cross(point);
+  return jacobian;
+}
+
 void body_jacobian(const Data& data, Frame frame, Matrix6x7& jacobian) {
   zero_jacobian(data, frame, jacobian);
   const Matrix3 R_transpose = frame_pose(data, frame).rotation.transpose();

@@ -13,6 +13,11 @@ const Transform& frame_pose(const Data& data, Frame frame);
 // Geometric Jacobian of `frame` in the base frame (seed paper eqs. 2-3; libfranka zeroJacobian):
 // rows linear velocity of the frame origin, then angular velocity.
 void zero_jacobian(const Data& data, Frame frame, Matrix6x7& jacobian);
+// Linear Jacobian (base frame) of a point `point` (base frame) carried by link `link` (1..7; the
+// flange, the tool and its contacts ride on link 7): column j < link is joint j's axis acting on the
+// point, u_j + w_j x point; columns of the joints beyond the link are zero. The linear rows of
+// zero_jacobian for a point that is no frame: contact points, the trocar's shaft crossing.
+Matrix3x7 point_jacobian(const Data& data, int link, const Vector3& point);
 // The same Jacobian with both rows expressed in `frame` (libfranka bodyJacobian).
 void body_jacobian(const Data& data, Frame frame, Matrix6x7& jacobian);
 // Time derivative of zero_jacobian along joint velocity dq.

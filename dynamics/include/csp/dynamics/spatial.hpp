@@ -18,6 +18,7 @@ using Matrix6 = Eigen::Matrix<double, 6, 6>;
 using Vector7 = Eigen::Matrix<double, kNumJoints, 1>;
 using Matrix7 = Eigen::Matrix<double, kNumJoints, kNumJoints>;
 using Matrix6x7 = Eigen::Matrix<double, 6, kNumJoints>;
+using Matrix3x7 = Eigen::Matrix<double, 3, kNumJoints>;
 
 inline Matrix3 skew(const Vector3& v) {
   Matrix3 s;
