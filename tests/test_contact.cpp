@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <random>
 
 #include "contact_support.hpp"
 #include "csp/dynamics/contact.hpp"
@@ -370,6 +371,72 @@ TEST(ContactEmulator, EnergyNeverGrowsAndAStiffnessSweepStaysStable) {
   }
 }
 
+
+// Pressed with a known normal load and a tangential load below the friction cone, the probe creeps
+// at the regularised law's speed v_s F_t / sqrt((mu F_n)^2 - F_t^2) for the applied loads: the
+// implicit damping-and-friction step has the law's fixed point. It does so at the configured
+// substeps: the friction's slope mu F_n / v_s (1500 N s/m here) needs no shorter step.
+TEST(ContactEmulator, CreepBelowTheConeIsTheLawsSpeedForTheAppliedLoad) {
+  const Material& m = shipped("abdomen");
+  rt::EmulatorSettings s = probe_settings();
+  s.scene = flat_surface(m, 0.002);
+  Emulator emulator(s);
+  const double normal = 10.0, tangential = 0.5 * m.friction * normal;
+  run_pushing(emulator, Vector3(tangential, 0, -normal), 3000);
+  ASSERT_TRUE(emulator.in_motion()) << emulator.reflex_reason();
+  const double x0 = emulator.state().O_T_EE[12];
+  run_pushing(emulator, Vector3(tangential, 0, -normal), 1000);
+  const double creep = (emulator.state().O_T_EE[12] - x0) / 1.0;
+  const double v_s = s.contact.friction_velocity;
+  const double expected = v_s * tangential / std::sqrt(std::pow(m.friction * normal, 2) - tangential * tangential);
+  // Measured 2.4 % fast: the load acts at the TCP, the contact lies on the probe's face below it,
+  // and the arm turns a little under that moment (the controller holds no orientation).
+  EXPECT_NEAR(creep, expected, 0.05 * expected);
+  EXPECT_EQ(emulator.contact().active_contacts, 1);
+  EXPECT_EQ(emulator.contact().substeps, s.substeps);
+  EXPECT_LE(emulator.contact().newton_iterations, 3);
+}
+
+// The implicit step solves backward Euler: M (v - v_free) = h sum_c J_c^T F_c,dissipative(v), the
+// dissipative forces being what the state reports at v (force minus the elastic k delta^n n); and
+// with the surface at rest it never adds kinetic energy (v^T M v <= v_free^T M v_free: the
+// minimiser of a convex dissipation potential smallest at rest). Random velocities, one pressing
+// contact at a time from the flat surface under the probe and the furniture's stiff one.
+TEST(ContactImplicitStep, SolvesBackwardEulerAndNeverAddsEnergy) {
+  for (const char* name : {"abdomen", "furniture"}) {
+    rt::EmulatorSettings s = probe_settings();
+    s.scene = flat_surface(shipped(name), 0.002);
+    Emulator emulator(s);
+    run_pushing(emulator, Vector3(0, 0, -10.0), 1500);
+    ASSERT_TRUE(emulator.in_motion()) << emulator.reflex_reason();
+    const Vector7 q = q_of(emulator.state());
+    rt::SceneContact contact(s.scene, s.contact);
+    rt::ContactState state = contact.initial_state();
+    Data data;
+    crba(emulator.plant_model(), data, q);
+    const Matrix7 M = data.mass_matrix;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> speed(-0.05, 0.05);
+    for (int trial = 0; trial < 20; ++trial) {
+      Vector7 dq, v_free;
+      for (int i = 0; i < kNumJoints; ++i) {
+        dq[i] = speed(rng);
+        v_free[i] = speed(rng);
+      }
+      contact.evaluate(emulator.plant_model(), data, 2.0, q, dq, state);
+      ASSERT_EQ(state.active_contacts, 1) << name;
+      const double h = 5e-4;
+      const Vector7 v = contact.dissipate(data, M, dq, v_free, h, state);
+      const rt::ContactPoint& c = state.contacts[0];
+      const Vector3 dissipative = c.force - c.elastic_force * c.normal;
+      const Vector7 residual = M * (v - v_free) - h * c.jacobian.transpose() * dissipative;
+      EXPECT_LT(residual.norm(), 1e-10 * (1.0 + (M * v_free).norm())) << name << " trial " << trial;
+      EXPECT_LE(v.dot(M * v), v_free.dot(M * v_free) * (1.0 + 1e-12)) << name << " trial " << trial;
+      EXPECT_GE(c.normal_force, 0.0) << name;
+      EXPECT_LE((c.force - c.force.dot(c.normal) * c.normal).norm(), c.friction_limit * (1.0 + 1e-12)) << name;
+    }
+  }
+}
 
 // ---------------------------------------------------------------------------------------------
 // The robot around the contact: flags, reflexes, determinism

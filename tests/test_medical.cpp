@@ -169,13 +169,12 @@ TEST(DrillingLaw, BadNumbersAreRefused) {
   EXPECT_THROW(BoneLayer{bad}, std::invalid_argument);
 }
 
-// The tissue's joint torque at rest is the gradient of its potential: the trocar ring's
-// U = k e^2 / 2 (e the shaft's offset in the wall), by central differences in q.
-TEST(MedicalPlantTest, TrocarTorqueIsThePotentialsGradient) {
+// The trocar ring's force at rest is the gradient of its potential U = k e^2 / 2 (e the shaft's
+// offset in the wall): its generalised force J^T F is -dU/dq, by central differences in q.
+TEST(TissueElement, TrocarForceIsThePotentialsGradient) {
   const Scenario scenario = medical_scenario("laparoscopic_pivoting");
-  MedicalPlantSettings settings;
-  settings.trocar = TrocarSettings{};
-  MedicalPlant plant(scenario.emulator.plant, *scenario.emulator.scene, settings);
+  const TrocarSettings settings;
+  TrocarRing trocar(*scenario.emulator.scene, settings);
   // A pose with the shaft through the wall, 4 mm off the trocar.
   const auto& pivot = std::get<RcmPivot>(scenario.emulator.scene->task);
   Model model(scenario.emulator.plant);
@@ -192,18 +191,22 @@ TEST(MedicalPlantTest, TrocarTorqueIsThePotentialsGradient) {
     error << pivot.trocar + Vector3(0.004, 0.0, -0.06) - tcp.translation, rotation_vector(tcp.rotation, vertical);
     q += J.transpose() * (J * J.transpose()).ldlt().solve(error);
   }
-  const Vector7 tau = plant.joint_torque(0.0, q, Vector7::Zero());
-  ASSERT_NEAR(plant.trocar_offset(), 0.004, 1e-3);
-  const double k = settings.trocar->stiffness, h = 1e-6;
+  forward_kinematics(model, data, q);
+  const ToolForce f = trocar.force(0.0, data, Vector7::Zero());
+  ASSERT_NEAR(trocar.offset(), 0.004, 1e-3);
+  EXPECT_EQ(f.stiffness, settings.stiffness);
+  const Vector7 tau = point_jacobian(data, kNumJoints, f.point).transpose() * f.force;
+  const double k = settings.stiffness, h = 1e-6;
+  auto potential = [&](const Vector7& at) {
+    forward_kinematics(model, data, at);
+    trocar.force(0.0, data, Vector7::Zero());
+    return 0.5 * k * trocar.offset() * trocar.offset();
+  };
   for (int i = 0; i < kNumJoints; ++i) {
     Vector7 plus = q, minus = q;
     plus[i] += h;
     minus[i] -= h;
-    plant.joint_torque(0.0, plus, Vector7::Zero());
-    const double up = 0.5 * k * plant.trocar_offset() * plant.trocar_offset();
-    plant.joint_torque(0.0, minus, Vector7::Zero());
-    const double down = 0.5 * k * plant.trocar_offset() * plant.trocar_offset();
-    EXPECT_NEAR(tau[i], (up - down) / (2.0 * h), 1e-5) << "joint " << i + 1;
+    EXPECT_NEAR(tau[i], -(potential(plus) - potential(minus)) / (2.0 * h), 1e-5) << "joint " << i + 1;
   }
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -21,6 +22,9 @@ constexpr double kHorizon = 2.0 * kDeltaT;
 // Pairs this close are watched for a contact within the horizon: 1 cm in 2 ms is 5 m/s, faster
 // than any point of a Panda moves (its TCP's limit is 1.7 m/s, libfranka's kMaxTranslationalVelocity) [m].
 constexpr double kLookAhead = 1e-2;
+// Newton steps of the implicit dissipation step before it takes its iterate (a safety net: the
+// tests and the benchmark see 0 to 4).
+constexpr int kMaxNewtonIterations = 20;
 
 // The link a capsule's frame moves with (1..7), 0 for the base.
 int link_of(CapsuleFrame frame) {
@@ -49,25 +53,31 @@ Capsule shifted(Capsule c, const Vector3& by) {
   return c;
 }
 
-// Velocity of a point (base frame) of link `link` (1..7): the joints up to it, about their axes
-// (Data::axis: linear-first motion vectors at the base origin).
-Vector3 point_velocity(const Data& data, int link, const Vector7& dq, const Vector3& point) {
-  Vector3 v = Vector3::Zero();
-  for (int j = 0; j < link; ++j) v += (data.axis[j].head<3>() + data.axis[j].tail<3>().cross(point)) * dq[j];
-  return v;
+// The tool capsule a tissue element takes over: the one whose end lies nearest the TCP (its
+// working end: the burr's bit, the instrument's shaft tip).
+int tool_tip_capsule(const std::vector<FrameCapsule>& capsules, const Vector3& tcp) {
+  int tip = -1;
+  for (int c = kNumArmCapsules; c < static_cast<int>(capsules.size()); ++c)
+    if (tip < 0 || (capsules[c].local.b - tcp).norm() < (capsules[tip].local.b - tcp).norm()) tip = c;
+  return tip;
 }
 
-// The point's linear Jacobian (3 x 7, zero beyond `link`).
-Eigen::Matrix<double, 3, kNumJoints> point_jacobian(const Data& data, int link, const Vector3& point) {
-  Eigen::Matrix<double, 3, kNumJoints> J = Eigen::Matrix<double, 3, kNumJoints>::Zero();
-  for (int j = 0; j < link; ++j) J.col(j) = data.axis[j].head<3>() + data.axis[j].tail<3>().cross(point);
-  return J;
+// psi'(u) of the Hunt-Crossley damping at separating speed u: the normal force is
+// F_n = e - c u >= 0 (e = k delta^n, c = (3/2) alpha e), so its velocity-dependent part is
+// -min(c u, e): c u while the contact presses, e (all of the elastic force) once it would pull.
+double damping_slope_force(double elastic, double damping, double u) { return std::min(damping * u, elastic); }
+
+// psi(u), the potential whose derivative that is (convex: c u^2 / 2, then linear).
+double damping_potential(double elastic, double damping, double u) {
+  if (damping * u <= elastic) return 0.5 * damping * u * u;
+  return elastic * u - 0.5 * elastic * elastic / damping;
 }
 
 }  // namespace
 
-SceneContact::SceneContact(std::shared_ptr<const Scene> scene, const ContactOptions& options)
-    : scene_(std::move(scene)), options_(options) {
+SceneContact::SceneContact(std::shared_ptr<const Scene> scene, const ContactOptions& options,
+                           std::vector<TissueElement> tissue)
+    : scene_(std::move(scene)), options_(options), tissue_(std::move(tissue)) {
   if (!scene_) throw std::invalid_argument("contact: no scene");
   if (!(std::isfinite(options_.friction_velocity) && options_.friction_velocity > 0.0))
     throw std::invalid_argument("contact: friction_velocity: expected a positive speed [m/s]");
@@ -88,11 +98,26 @@ SceneContact::SceneContact(std::shared_ptr<const Scene> scene, const ContactOpti
     const std::optional<Aabb> box = shape_box(o.shape);
     obstacle_box_.push_back(box ? grown(*box, o.motion.amplitude) : Aabb{});
   }
+  // The pairs a tissue element replaces: its obstacle against the tool's working end.
+  std::vector<Pair> replaced;
+  for (const TissueElement& element : tissue_) {
+    if (!element.law) throw std::invalid_argument("contact: a tissue element without a law");
+    const auto& obstacles = scene_->obstacles;
+    const auto found = std::find_if(obstacles.begin(), obstacles.end(),
+                                    [&](const Obstacle& o) { return o.name == element.obstacle; });
+    if (found == obstacles.end())
+      throw std::invalid_argument(scene_->path + ": no obstacle `" + element.obstacle + "` for a tissue element");
+    const int tip = tool_tip_capsule(capsules_, scene_->tool.F_T_EE.translation);
+    if (tip < 0) throw std::invalid_argument(scene_->path + ": a tissue element needs a tool with capsules (its working end)");
+    replaced.push_back({tip, static_cast<int>(found - obstacles.begin())});
+  }
   for (int c = 0; c < static_cast<int>(capsules_.size()); ++c) {
     if (link_of(capsules_[c].frame) == 0) continue;   // the base capsule cannot move: nothing to push
     for (int o = 0; o < static_cast<int>(scene_->obstacles.size()); ++o) {
       const auto& exempt = scene_->obstacles[o].exempt;
-      if (material_[o] && std::find(exempt.begin(), exempt.end(), capsules_[c].name) == exempt.end())
+      const bool is_replaced = std::any_of(replaced.begin(), replaced.end(),
+                                           [&](const Pair& p) { return p.capsule == c && p.obstacle == o; });
+      if (material_[o] && !is_replaced && std::find(exempt.begin(), exempt.end(), capsules_[c].name) == exempt.end())
         pairs_.push_back({c, o});
     }
   }
@@ -103,12 +128,13 @@ ContactState SceneContact::initial_state() const {
   state.obstacle_normal_force.assign(scene_->obstacles.size(), 0.0);
   state.contacts.resize(pairs_.size());
   state.approaching.resize(pairs_.size());
+  state.tissue.resize(tissue_.size());
   return state;
 }
 
 void SceneContact::require_clear(const Model& plant, Data& data, const Vector7& q) const {
   ContactState state = initial_state();
-  evaluate(plant, data, 0.0, q, Vector7::Zero(), state);
+  evaluate_obstacles(plant, data, 0.0, q, Vector7::Zero(), state);
   if (state.active_contacts == 0) return;
   const ContactPoint& c = *std::max_element(state.contacts.begin(), state.contacts.begin() + state.active_contacts,
                                             [](const auto& a, const auto& b) { return a.penetration < b.penetration; });
@@ -120,16 +146,23 @@ void SceneContact::require_clear(const Model& plant, Data& data, const Vector7& 
 }
 
 void SceneContact::evaluate(const Model& plant, Data& data, double t, const Vector7& q, const Vector7& dq,
-                            ContactState& state) const {
+                            ContactState& state) {
+  evaluate_obstacles(plant, data, t, q, dq, state);
+  for (std::size_t i = 0; i < tissue_.size(); ++i) {
+    state.tissue[i] = tissue_[i].law->force(t, data, dq);
+    add_force(data, kNumJoints, state.tissue[i].point, state.tissue[i].force, true, state);
+  }
+}
+
+void SceneContact::evaluate_obstacles(const Model& plant, Data& data, double t, const Vector7& q, const Vector7& dq,
+                                      ContactState& state) const {
   forward_kinematics(plant, data, q);
   std::fill(state.obstacle_normal_force.begin(), state.obstacle_normal_force.end(), 0.0);
   state.link_wrenches = kNoLinkWrenches;
+  state.O_F_tool.setZero();
   state.active_contacts = 0;
   state.approaching_contacts = 0;
   state.max_penetration = 0.0;
-  Vector3 tool_force = Vector3::Zero(), tool_moment = Vector3::Zero();
-  const Vector3 tcp = data.O_T_EE.translation;
-  const int first_tool_capsule = kNumArmCapsules;
 
   int placed_index = -1;
   Capsule capsule;
@@ -160,10 +193,10 @@ void SceneContact::evaluate(const Model& plant, Data& data, double t, const Vect
     contact.penetration = -d.distance;
     contact.normal = (d.on_a - d.on_b) / d.distance;   // on_a - on_b = distance x normal (geometry.hpp)
     contact.point = 0.5 * (d.on_a + d.on_b) + displacement;
-    Vector3 velocity = point_velocity(data, contact.link, dq, contact.point);
-    if (moves) velocity -= obstacle.motion.velocity(t);
-    const double normal_velocity = contact.normal.dot(velocity);
-    contact.penetration_rate = -normal_velocity;
+    contact.jacobian = point_jacobian(data, contact.link, contact.point);
+    contact.surface_velocity = moves ? obstacle.motion.velocity(t) : Vector3::Zero();
+    const Vector3 velocity = contact.jacobian * dq - contact.surface_velocity;
+    contact.penetration_rate = -contact.normal.dot(velocity);
     if (!touching) {   // apart: kept when it closes within the cycle
       contact.normal_force = 0.0;
       contact.force.setZero();
@@ -171,53 +204,146 @@ void SceneContact::evaluate(const Model& plant, Data& data, double t, const Vect
       continue;
     }
     ++state.active_contacts;
+    // The law at (q, dq): its elastic part is applied now, its damping and friction (the friction
+    // bounded by the normal force at dq) on the new velocity (dissipate).
     const Material& m = *material_[pair.obstacle];
-    contact.normal_force = hunt_crossley_force(m, contact.penetration, contact.penetration_rate);
-    contact.force = contact.normal_force * contact.normal +
-                    regularized_friction(m.friction, contact.normal_force, velocity - normal_velocity * contact.normal,
-                                         options_.friction_velocity);
-
+    contact.elastic_force = hunt_crossley_force(m, contact.penetration, 0.0);
+    contact.damping = 1.5 * m.damping * contact.elastic_force;
+    contact.friction_limit = m.friction * hunt_crossley_force(m, contact.penetration, contact.penetration_rate);
+    contact.normal_force = contact.elastic_force;
+    contact.force = contact.elastic_force * contact.normal;
     state.max_penetration = std::max(state.max_penetration, contact.penetration);
     state.obstacle_normal_force[pair.obstacle] += contact.normal_force;
-    const Transform& link = data.O_T_joint[contact.link - 1];
-    const Vector3 force = link.rotation.transpose() * contact.force;
-    const Vector3 arm = link.rotation.transpose() * (contact.point - link.translation);
-    state.link_wrenches[contact.link - 1].head<3>() += force;
-    state.link_wrenches[contact.link - 1].tail<3>() += arm.cross(force);
-    if (pair.capsule >= first_tool_capsule) {
-      tool_force += contact.force;
-      tool_moment += (contact.point - tcp).cross(contact.force);
-    }
+    add_force(data, contact.link, contact.point, contact.force, pair.capsule >= kNumArmCapsules, state);
   }
-  state.O_F_tool << -tool_force, -tool_moment;
+}
+
+// A force on link `link` at `point` (base frame): the link-frame wrench about its origin, and, on
+// the tool, O_F_tool (the tool on the scene: minus it, about the TCP).
+void SceneContact::add_force(const Data& data, int link, const Vector3& point, const Vector3& force, bool on_tool,
+                             ContactState& state) const {
+  const Transform& frame = data.O_T_joint[link - 1];
+  const Vector3 f = frame.rotation.transpose() * force;
+  const Vector3 arm = frame.rotation.transpose() * (point - frame.translation);
+  state.link_wrenches[link - 1].head<3>() += f;
+  state.link_wrenches[link - 1].tail<3>() += arm.cross(f);
+  if (on_tool) {
+    state.O_F_tool.head<3>() -= force;
+    state.O_F_tool.tail<3>() -= (point - data.O_T_EE.translation).cross(force);
+  }
+}
+
+Vector7 SceneContact::dissipate(const Data& data, const Matrix7& M, const Vector7& v_start, const Vector7& v_free,
+                                double h, ContactState& state) const {
+  const double v_s = options_.friction_velocity;
+  const std::span<const ContactPoint> contacts(state.contacts.data(), static_cast<std::size_t>(state.active_contacts));
+  // Phi(v), contact by contact in the contact's relative velocity r = J v - surface velocity:
+  // separating speed u = n . r, slip w = r - u n.
+  auto objective = [&](const Vector7& v) {
+    double phi = 0.5 * (v - v_free).dot(M * (v - v_free));
+    for (const ContactPoint& c : contacts) {
+      const Vector3 r = c.jacobian * v - c.surface_velocity;
+      const double u = c.normal.dot(r);
+      phi += h * (damping_potential(c.elastic_force, c.damping, u) +
+                  c.friction_limit * std::sqrt((r - u * c.normal).squaredNorm() + v_s * v_s));
+    }
+    return phi;
+  };
+  state.newton_iterations = 0;
+  if (contacts.empty()) return v_free;
+  // The gradient's scale: the momentum the step changes and the impulses the contacts can give.
+  double scale = (M * v_free).cwiseAbs().maxCoeff();
+  for (const ContactPoint& c : contacts)
+    scale += h * (c.elastic_force + c.friction_limit) * c.jacobian.cwiseAbs().maxCoeff();
+  Vector7 v = v_start;
+  std::optional<double> phi;   // Phi(v), once a line search needs it
+  for (int iteration = 0; iteration < kMaxNewtonIterations; ++iteration) {
+    Vector7 gradient = M * (v - v_free);
+    Matrix7 hessian = M;
+    for (const ContactPoint& c : contacts) {
+      const Vector3 r = c.jacobian * v - c.surface_velocity;
+      const double u = c.normal.dot(r);
+      const Vector3 w = r - u * c.normal;
+      const double rho = std::sqrt(w.squaredNorm() + v_s * v_s);
+      const Vector3 slope = damping_slope_force(c.elastic_force, c.damping, u) * c.normal + c.friction_limit / rho * w;
+      Matrix3 curvature = (c.friction_limit / rho) *
+                          (Matrix3::Identity() - c.normal * c.normal.transpose() - w * w.transpose() / (rho * rho));
+      if (c.damping * u < c.elastic_force) curvature += c.damping * c.normal * c.normal.transpose();
+      gradient += h * c.jacobian.transpose() * slope;
+      hessian += h * c.jacobian.transpose() * curvature * c.jacobian;
+    }
+    // Stationary to round-off: the backward-Euler equation holds (at a steady stick or creep
+    // v_start is already the answer).
+    if (gradient.cwiseAbs().maxCoeff() <= 1e-12 * scale) break;
+    const Vector7 step = -hessian.llt().solve(gradient);
+    const double decrease = -gradient.dot(step);   // the Newton decrement squared: Phi's predicted fall x 2
+    if (!phi) phi = objective(v);
+    ++state.newton_iterations;
+    // A fall Phi's round-off could not see: Newton's quadratic convergence has reached the minimiser
+    // to round-off; the full step is the last.
+    if (decrease <= 1e-14 * std::abs(*phi)) {
+      v += step;
+      break;
+    }
+    // Backtracking (Armijo): Phi is convex, so a short enough Newton step always decreases it.
+    double length = 1.0, phi_next = objective(v + step);
+    while (phi_next > *phi - 1e-4 * length * decrease && length >= 1e-10) {
+      length *= 0.5;
+      phi_next = objective(v + length * step);
+    }
+    if (length < 1e-10) break;   // no decrease left above round-off: v is the minimiser
+    v += length * step;
+    phi = phi_next;
+  }
+  add_dissipative_forces(data, v, state);
+  return v;
+}
+
+void SceneContact::add_dissipative_forces(const Data& data, const Vector7& v, ContactState& state) const {
+  const double v_s = options_.friction_velocity;
+  for (int i = 0; i < state.active_contacts; ++i) {
+    ContactPoint& c = state.contacts[i];
+    const Vector3 r = c.jacobian * v - c.surface_velocity;
+    const double u = c.normal.dot(r);
+    const double damping_force = -damping_slope_force(c.elastic_force, c.damping, u);   // along the normal
+    const Vector3 friction = regularized_friction(1.0, c.friction_limit, r - u * c.normal, v_s);
+    const Vector3 force = damping_force * c.normal + friction;
+    c.normal_force += damping_force;
+    c.force += force;
+    state.obstacle_normal_force[c.obstacle] += damping_force;
+    add_force(data, c.link, c.point, force, c.capsule >= kNumArmCapsules, state);
+  }
 }
 
 int SceneContact::required_substeps(const Model& plant, Data& data, const Vector7& q, const ContactState& state,
                                     int base) const {
-  if (state.active_contacts == 0 && state.approaching_contacts == 0) return base;
+  const bool tissue_stiff = std::any_of(state.tissue.begin(), state.tissue.end(),
+                                        [](const ToolForce& f) { return f.stiffness > 0.0; });
+  if (state.active_contacts == 0 && state.approaching_contacts == 0 && !tissue_stiff) return base;
   forward_kinematics(plant, data, q);
   crba(plant, data, q);
   const Eigen::LLT<Matrix7> mass(data.mass_matrix);
-  double omega_squared = 0.0, damping_rate = 0.0;
+  // The point's inverse effective mass, bounded above for every direction by the trace of
+  // J M^-1 J^T = |L^-1 J^T|_F^2 (M = L L^T).
+  auto inverse_mass = [&](const Matrix3x7& J) {
+    double sum = 0.0;
+    for (int axis = 0; axis < 3; ++axis) sum += mass.matrixL().solve(Vector7(J.row(axis).transpose())).squaredNorm();
+    return sum;
+  };
+  double omega_squared = 0.0;
   for (int i = 0; i < state.active_contacts + state.approaching_contacts; ++i) {
     const bool touching = i < state.active_contacts;
     const ContactPoint& c = touching ? state.contacts[i] : state.approaching[i - state.active_contacts];
-    // The contact's inverse effective mass, bounded above for every direction by the trace of
-    // J M^-1 J^T = |L^-1 J^T|_F^2 (M = L L^T).
-    const Eigen::Matrix<double, 3, kNumJoints> J = point_jacobian(data, c.link, c.point);
-    double inverse_mass = 0.0;
-    for (int axis = 0; axis < 3; ++axis) inverse_mass += mass.matrixL().solve(Vector7(J.row(axis).transpose())).squaredNorm();
-    const Material& m = *material_[c.obstacle];
-    // Stiffness, damping and friction where the contact may be by the end of the cycle.
+    // The stiffness where the contact may be by the end of the cycle.
     const double depth = c.penetration + std::max(0.0, c.penetration_rate) * kHorizon;
     if (depth <= 0.0) continue;
-    const double elastic = m.stiffness * std::pow(depth, m.exponent);
-    const double normal_force = elastic * (1.0 + 1.5 * m.damping * std::max(0.0, c.penetration_rate));
-    omega_squared += hunt_crossley_stiffness(m, depth) * inverse_mass;
-    damping_rate += (1.5 * m.damping * elastic + m.friction * normal_force / options_.friction_velocity) * inverse_mass;
+    omega_squared += hunt_crossley_stiffness(*material_[c.obstacle], depth) * inverse_mass(c.jacobian);
   }
-  // Symplectic Euler is stable for h omega < 2 and an explicit damping for h gamma < 2: half of each.
-  const double needed = kDeltaT * std::max(std::sqrt(omega_squared), damping_rate);
+  for (const ToolForce& f : state.tissue)
+    if (f.stiffness > 0.0) omega_squared += f.stiffness * inverse_mass(point_jacobian(data, kNumJoints, f.point));
+  // Symplectic Euler is stable for h omega < 2: half of it (the damping and the friction are
+  // implicit, dissipate(), and stable at any step).
+  const double needed = kDeltaT * std::sqrt(omega_squared);
   return std::clamp(static_cast<int>(std::ceil(needed)), base, std::max(base, options_.max_substeps));
 }
 

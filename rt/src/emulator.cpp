@@ -167,7 +167,7 @@ Emulator::Emulator(const EmulatorSettings& settings)
   PlantState& arm = plant_state_;
   arm.q = settings_.q_initial;
   if (settings_.scene) {
-    contact_.emplace(settings_.scene, settings_.contact);
+    contact_.emplace(settings_.scene, settings_.contact, settings_.tissue);
     contact_state_ = contact_->initial_state();
     contact_->require_clear(plant_, plant_data_, arm.q);
   }
@@ -477,10 +477,11 @@ LinkWrenches Emulator::external_link_wrenches(double t) {
   return wrenches;
 }
 
-// The scene's contact forces at time t and the arm's state, added to the scripted wrenches.
-void Emulator::add_contact_wrenches(double t, const LinkWrenches& scripted, LinkWrenches& total) {
-  contact_->evaluate(plant_, plant_data_, t, plant_state_.q, plant_state_.dq, contact_state_);
+// The scripted wrenches plus the scene's contact forces of the substep (contact_state_).
+LinkWrenches Emulator::with_contact_wrenches(const LinkWrenches& scripted) const {
+  LinkWrenches total;
   for (int i = 0; i < kNumJoints; ++i) total[i] = scripted[i] + contact_state_.link_wrenches[i];
+  return total;
 }
 
 // The inner torque loop and the plant, integrated with `substeps` semi-implicit (symplectic)
@@ -492,13 +493,15 @@ void Emulator::integrate() {
   TorqueLoop& loop = torque_loop_;
   const double cycle_start = state_.time.toSec() - kDeltaT;
   const LinkWrenches f_ext = external_link_wrenches(cycle_start);
-  LinkWrenches f_total;   // with a scene: the scripted wrenches and the contacts of the substep
   if (phase_ == Phase::kBraked) {
     // Brakes closed: the links stand still and the sensors carry the static load.
     arm.dq.setZero();
     arm.ddq.setZero();
-    if (contact_) add_contact_wrenches(cycle_start, f_ext, f_total);
-    rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, contact_ ? f_total : f_ext, arm.tau_J);
+    if (contact_) {
+      contact_->evaluate(plant_, plant_data_, cycle_start, arm.q, arm.dq, contact_state_);
+      contact_->add_dissipative_forces(plant_data_, arm.dq, contact_state_);
+    }
+    rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, contact_ ? with_contact_wrenches(f_ext) : f_ext, arm.tau_J);
     return;
   }
   gravity_compensation_torque();
@@ -542,15 +545,21 @@ void Emulator::integrate() {
     Vector7 tau_link = loop.tau_motor - friction_torque(friction, arm.dq);
     if (settings_.extra_joint_torque)
       tau_link -= settings_.extra_joint_torque(cycle_start + s * h, arm.q, arm.dq, loop.tau_motor);
-    if (contact_) add_contact_wrenches(cycle_start + s * h, f_ext, f_total);
-    forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, contact_ ? f_total : f_ext);
-    if (static_friction) {
-      // Static friction acts on the new velocity (implicit): a joint at rest stays exactly at rest
-      // while the torque on it is below its breakaway level; its sliding level follows dq.
-      Vector7 bound;
-      for (int i = 0; i < kNumJoints; ++i)
-        bound[i] = h * stribeck_level(friction.breakaway[i], friction.stribeck_velocity[i], arm.dq[i]);
-      const Vector7 dq_next = static_friction_velocity(plant_data_.mass_matrix, arm.dq + h * plant_data_.ddq, bound);
+    if (contact_) contact_->evaluate(plant_, plant_data_, cycle_start + s * h, arm.q, arm.dq, contact_state_);
+    forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, contact_ ? with_contact_wrenches(f_ext) : f_ext);
+    if (contact_ || static_friction) {
+      Vector7 dq_next = arm.dq + h * plant_data_.ddq;
+      // The contacts' damping and friction act on the new velocity (implicit, docs/contact.md): a
+      // friction slope mu F_n / v_s of thousands of N s/m needs no shorter step.
+      if (contact_) dq_next = contact_->dissipate(plant_data_, plant_data_.mass_matrix, arm.dq, dq_next, h, contact_state_);
+      // Static friction too: a joint at rest stays exactly at rest while the torque on it is below
+      // its breakaway level; its sliding level follows dq.
+      if (static_friction) {
+        Vector7 bound;
+        for (int i = 0; i < kNumJoints; ++i)
+          bound[i] = h * stribeck_level(friction.breakaway[i], friction.stribeck_velocity[i], arm.dq[i]);
+        dq_next = static_friction_velocity(plant_data_.mass_matrix, dq_next, bound);
+      }
       arm.ddq = (dq_next - arm.dq) / h;
       arm.dq = dq_next;
     } else {

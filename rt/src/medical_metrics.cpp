@@ -28,7 +28,7 @@ double max_of(const std::vector<double>& values) {
 
 MedicalRecorder::MedicalRecorder(const Scenario& scenario, const Emulator& emulator,
                                  std::shared_ptr<const MedicalStatus> status)
-    : emulator_(emulator), scene_(scenario.emulator.scene), tissue_(scenario.tissue), status_(std::move(status)), controller_(scenario.controller.medical) {
+    : emulator_(emulator), scene_(scenario.emulator.scene), bone_(scenario.bone), status_(std::move(status)), controller_(scenario.controller.medical) {
   if (!scene_) throw std::invalid_argument("medical metrics need a scenario with a scene");
   samples_.reserve(static_cast<std::size_t>(std::min(scenario.duration, 600.0) * 1000.0) + 1);
 }
@@ -36,8 +36,7 @@ MedicalRecorder::MedicalRecorder(const Scenario& scenario, const Emulator& emula
 void MedicalRecorder::add(const RobotState& state, double t) {
   Sample s;
   s.t = t;
-  s.true_force = emulator_.contact().O_F_tool.head<3>();
-  if (tissue_) s.true_force -= tissue_->force();
+  s.true_force = emulator_.contact().O_F_tool.head<3>();   // the scene's contacts and the tissue's
   s.penetration = emulator_.contact().max_penetration;
   s.estimated_force = head3(state.O_F_ext_hat_K);
   s.tcp = Vector3(state.O_T_EE[12], state.O_T_EE[13], state.O_T_EE[14]);
@@ -73,7 +72,7 @@ std::vector<MedicalMetric> MedicalRecorder::metrics() const {
   for (const Sample& s : samples_) estimate_error.push_back((s.estimated_force - s.true_force).norm());
 
   if (std::holds_alternative<UltrasoundScan>(scene_->task)) {
-    std::vector<double> force_error;
+    std::vector<double> force_error, indentation;
     int losses = 0;
     bool touched = false, in_contact = false;
     for (const Sample& s : samples_) {
@@ -85,12 +84,15 @@ std::vector<MedicalMetric> MedicalRecorder::metrics() const {
       if (s.t >= controller_.settle) {
         force_error.push_back(f - controller_.desired_force);
         path.push_back(path_error(s));
+        indentation.push_back(s.penetration);
       }
     }
     out.push_back({"contact force RMS error (scan)", rms(force_error), "N"});
     out.push_back({"contact losses", static_cast<double>(losses), ""});
     out.push_back({"path error RMS (scan)", 1e3 * rms(path), "mm"});
     out.push_back({"path error max (scan)", 1e3 * max_of(path), "mm"});
+    out.push_back({"skin indentation RMS (scan)", 1e3 * rms(indentation), "mm"});
+    out.push_back({"skin indentation max (scan)", 1e3 * max_of(indentation), "mm"});
   } else if (std::holds_alternative<RcmPivot>(scene_->task)) {
     std::vector<double> force;
     for (const Sample& s : samples_)
@@ -108,15 +110,15 @@ std::vector<MedicalMetric> MedicalRecorder::metrics() const {
       thrust.push_back(axial(s.true_force, s));
       depth.push_back(s.depth);
     }
-    const double thickness = tissue_ && tissue_->bone() ? tissue_->bone()->settings().thickness : 0.0;
+    const double thickness = bone_ ? bone_->layer().settings().thickness : 0.0;
     // NaN: it did not happen.
-    const double breakthrough = tissue_ ? tissue_->breakthrough_time().value_or(NAN) : NAN;
+    const double breakthrough = bone_ ? bone_->breakthrough_time().value_or(NAN) : NAN;
     const double detected = status_ ? status_->breakthrough_detected_at.value_or(NAN) : NAN;
     out.push_back({"thrust max", max_of(thrust), "N"});
     out.push_back({"breakthrough time", breakthrough, "s"});
     out.push_back({"breakthrough detected at", detected, "s"});
     out.push_back({"overshoot past the bone", 1e3 * std::max(0.0, max_of(depth) - thickness), "mm"});
-    out.push_back({"bone left under the bit", tissue_ && tissue_->bone() ? 1e3 * (thickness - tissue_->bone()->removed()) : NAN, "mm"});
+    out.push_back({"bone left under the bit", bone_ ? 1e3 * (thickness - bone_->layer().removed()) : NAN, "mm"});
   }
   out.push_back({"force estimate error RMS (|O_F_ext_hat_K - true|)", rms(estimate_error), "N"});
   out.push_back({"force estimate error max", max_of(estimate_error), "N"});

@@ -1,7 +1,5 @@
 #include "csp/rt/medical_plant.hpp"
 
-#include "csp/rt/medical_controllers.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -43,68 +41,54 @@ double BoneLayer::step(double x, double x_dot, double dt) {
   return engaged * full;
 }
 
-MedicalPlant::MedicalPlant(const ModelParameters& plant, const Scene& scene, const MedicalPlantSettings& settings)
-    : model_(plant), trocar_(settings.trocar) {
-  if (settings.bone) {
-    const auto* hole = std::get_if<BurrHole>(&scene.task);
-    require(hole != nullptr, "a bone layer needs a scene whose task is a burr_hole (" + scene.path + ")");
-    hole_ = *hole;
-    bone_.emplace(*settings.bone);
-  }
-  if (trocar_) {
-    const auto* pivot = std::get_if<RcmPivot>(&scene.task);
-    require(pivot != nullptr, "a trocar needs a scene whose task is an rcm_pivot (" + scene.path + ")");
-    require(positive_finite(trocar_->stiffness), "trocar stiffness: a positive number of N/m");
-    require(non_negative_finite(trocar_->damping), "trocar damping: a non-negative number of N s/m");
-    require(trocar_->port_axis.allFinite() && trocar_->port_axis.norm() > 0.0, "trocar port_axis: a non-zero vector");
-    trocar_->port_axis.normalize();
-    trocar_point_ = pivot->trocar;
-  }
+BoneUnderBurr::BoneUnderBurr(const Scene& scene, const BoneLayerSettings& settings) : layer_(settings) {
+  const auto* hole = std::get_if<BurrHole>(&scene.task);
+  require(hole != nullptr, "a bone layer needs a scene whose task is a burr_hole (" + scene.path + ")");
+  hole_ = *hole;
 }
 
-Vector7 MedicalPlant::joint_torque(double t, const Vector7& q, const Vector7& dq) {
+ToolForce BoneUnderBurr::force(double t, const Data& data, const Vector7& dq) {
   const double dt = last_time_ ? std::max(0.0, t - *last_time_) : 0.0;
   last_time_ = t;
-  forward_kinematics(model_, data_, q);
-  zero_jacobian(data_, Frame::kEndEffector, jacobian_);
-  const Transform& tcp = frame_pose(data_, Frame::kEndEffector);
-  Vector7 tau = Vector7::Zero();   // J^T F of the forces on the tool
-  force_.setZero();
+  const Vector3& tip = data.O_T_EE.translation;
+  const Vector3 inward = -hole_.axis;
+  tip_depth_ = (tip - hole_.entry).dot(inward);
+  thrust_ = layer_.step(tip_depth_, (point_jacobian(data, kNumJoints, tip) * dq).dot(inward), dt);
+  if (layer_.broken_through() && !breakthrough_time_) breakthrough_time_ = t;
+  const BoneLayerSettings& s = layer_.settings();
+  // The face's stiffness while bone is left under the bit, the soft tissue's after.
+  const double stiffness = layer_.broken_through() ? s.soft_stiffness : s.stiffness;
+  return {tip, thrust_ * hole_.axis, tip_depth_ > 0.0 ? stiffness : 0.0};   // pushes the bit back out
+}
 
-  if (bone_) {
-    const Vector3 n = -hole_.axis;
-    const Vector3 tip_velocity = jacobian_.topRows<3>() * dq;
-    tip_depth_ = (tcp.translation - hole_.entry).dot(n);
-    thrust_ = bone_->step(tip_depth_, tip_velocity.dot(n), dt);
-    if (bone_->broken_through() && !breakthrough_time_) breakthrough_time_ = t;
-    const Vector3 force = thrust_ * hole_.axis;   // pushes the bit back out
-    tau += jacobian_.topRows<3>().transpose() * force;
-    force_ += force;
-  }
+TrocarRing::TrocarRing(const Scene& scene, const TrocarSettings& settings) : settings_(settings) {
+  const auto* pivot = std::get_if<RcmPivot>(&scene.task);
+  require(pivot != nullptr, "a trocar needs a scene whose task is an rcm_pivot (" + scene.path + ")");
+  require(positive_finite(settings_.stiffness), "trocar stiffness: a positive number of N/m");
+  require(non_negative_finite(settings_.damping), "trocar damping: a non-negative number of N s/m");
+  require(settings_.port_axis.allFinite() && settings_.port_axis.norm() > 0.0, "trocar port_axis: a non-zero vector");
+  settings_.port_axis.normalize();
+  trocar_ = pivot->trocar;
+}
 
-  if (trocar_) {
-    // Where the shaft (flange to tip, along the tool's z axis) crosses the wall plane.
-    const Vector3& a = trocar_->port_axis;
-    const Vector3 axis = tcp.rotation.col(2);
-    const Vector3 flange = frame_pose(data_, Frame::kFlange).translation;
-    const double along = axis.dot(a);
-    trocar_offset_ = 0.0;
-    if (std::abs(along) > 1e-9) {
-      const double s = (trocar_point_ - tcp.translation).dot(a) / along;   // from the tip along the axis
-      const Vector3 crossing = tcp.translation + s * axis;
-      const bool through = s < 0.0 && (crossing - tcp.translation).norm() < (flange - tcp.translation).norm();
-      if (through) {
-        const Matrix3 in_wall = Matrix3::Identity() - a * a.transpose();
-        const Vector3 offset = in_wall * (crossing - trocar_point_);
-        trocar_offset_ = offset.norm();
-        const Eigen::Matrix<double, 3, 7> J = point_jacobian(jacobian_, crossing - tcp.translation);
-        const Vector3 force = -trocar_->stiffness * offset - trocar_->damping * (in_wall * (J * dq));
-        tau += J.transpose() * force;
-        force_ += force;
-      }
-    }
-  }
-  return -tau;
+ToolForce TrocarRing::force(double, const Data& data, const Vector7& dq) {
+  // Where the shaft (flange to tip, along the tool's z axis) crosses the wall plane.
+  const Vector3& a = settings_.port_axis;
+  const Transform& tcp = data.O_T_EE;
+  const Vector3 axis = tcp.rotation.col(2);
+  const Vector3& flange = data.O_T_F.translation;
+  const double along = axis.dot(a);
+  offset_ = 0.0;
+  if (std::abs(along) <= 1e-9) return {};   // the shaft lies in the wall's plane: it never crosses it
+  const double s = (trocar_ - tcp.translation).dot(a) / along;   // from the tip along the axis
+  const Vector3 crossing = tcp.translation + s * axis;
+  const bool through = s < 0.0 && (crossing - tcp.translation).norm() < (flange - tcp.translation).norm();
+  if (!through) return {};
+  const Matrix3 in_wall = Matrix3::Identity() - a * a.transpose();
+  const Vector3 offset = in_wall * (crossing - trocar_);
+  offset_ = offset.norm();
+  const Vector3 velocity = in_wall * (point_jacobian(data, kNumJoints, crossing) * dq);
+  return {crossing, -settings_.stiffness * offset - settings_.damping * velocity, settings_.stiffness};
 }
 
 }  // namespace csp::rt

@@ -131,37 +131,38 @@ void read_medical_controller(const Field& f, const std::string& type, MedicalCon
   }
 }
 
-// The tissue law replaces the scene contact of the obstacle named by `name` (the skull, the
-// abdomen) with the tool's working end: the tool capsule that ends nearest the TCP is exempted
-// from that obstacle in a copy of the scene.
-void exempt_tool_tip(const Field& name, std::shared_ptr<const Scene>& scene_in) {
-  auto scene = std::make_shared<Scene>(*scene_in);
+// The obstacle a tissue law takes over from the scene contact (with the tool's working end).
+std::string tissue_obstacle(const Field& name, const Scene& scene) {
   const std::string obstacle = name.text();
-  const auto found = std::find_if(scene->obstacles.begin(), scene->obstacles.end(),
-                                  [&](const Obstacle& o) { return o.name == obstacle; });
-  if (found == scene->obstacles.end()) name.fail("the name of an obstacle of the scene " + scene->path);
-  const auto& capsules = scene->tool.capsules;
-  if (capsules.empty()) name.fail("a scene whose tool has capsules (its working end)");
-  const Vector3 tcp = scene->tool.F_T_EE.translation;
-  const auto tip = std::min_element(capsules.begin(), capsules.end(), [&](const NamedCapsule& x, const NamedCapsule& y) {
-    return (x.capsule.b - tcp).norm() < (y.capsule.b - tcp).norm();
-  });
-  found->exempt.push_back(tip->name);
-  scene_in = scene;
+  if (std::none_of(scene.obstacles.begin(), scene.obstacles.end(), [&](const Obstacle& o) { return o.name == obstacle; }))
+    name.fail("the name of an obstacle of the scene " + scene.path);
+  if (scene.tool.capsules.empty()) name.fail("a scene whose tool has capsules (its working end)");
+  return obstacle;
 }
 
-// tissue: the bone layer under the scene's burr hole and the trocar ring at its port, in the
-// plant's joint-torque hook, each replacing the scene contact of its `obstacle` with the tool's tip.
+// A tissue law's construction error (the scene's task does not fit it) as the section's error.
+template <typename Law, typename Settings>
+std::shared_ptr<Law> make_tissue(const Field& f, const Scene& scene, const Settings& settings) {
+  try {
+    return std::make_shared<Law>(scene, settings);
+  } catch (const std::invalid_argument& e) {
+    f.fail(e.what());
+  }
+}
+
+// tissue: the bone layer under the scene's burr hole and the trocar ring at its port, contact
+// elements of the scene's contact engine, each replacing the scene contact of its `obstacle` with
+// the tool's working end.
 void read_tissue(const Field& top, Scenario& s) {
   const Field f = top["tissue"];
   if (!s.emulator.scene) f.fail("a scene (`scene:`): the tissue sits at the scene's task");
+  const Scene& scene = *s.emulator.scene;
   f.allow_only({"bone", "trocar"});
-  MedicalPlantSettings settings;
   if (f.has("bone")) {
     const Field b = f["bone"];
     b.allow_only({"obstacle", "thickness", "stiffness", "dissipation", "threshold_thrust", "removal_rate",
                   "point_height", "soft_stiffness"});
-    BoneLayerSettings& bone = settings.bone.emplace();
+    BoneLayerSettings bone;
     if (b.has("thickness")) bone.thickness = positive(b["thickness"]);
     if (b.has("stiffness")) bone.stiffness = positive(b["stiffness"]);
     if (b.has("dissipation")) bone.dissipation = non_negative(b["dissipation"]);
@@ -169,28 +170,26 @@ void read_tissue(const Field& top, Scenario& s) {
     if (b.has("removal_rate")) bone.removal_rate = positive(b["removal_rate"]);
     if (b.has("point_height")) bone.point_height = positive(b["point_height"]);
     if (b.has("soft_stiffness")) bone.soft_stiffness = non_negative(b["soft_stiffness"]);
-    exempt_tool_tip(b["obstacle"], s.emulator.scene);
+    const std::string obstacle = tissue_obstacle(b["obstacle"], scene);
+    auto law = make_tissue<BoneUnderBurr>(b, scene, bone);
+    s.bone = law;
+    s.emulator.tissue.push_back({law, obstacle});
   }
   if (f.has("trocar")) {
     const Field t = f["trocar"];
     t.allow_only({"obstacle", "stiffness", "damping", "port_axis"});
-    TrocarSettings& trocar = settings.trocar.emplace();
-    exempt_tool_tip(t["obstacle"], s.emulator.scene);
+    TrocarSettings trocar;
+    const std::string obstacle = tissue_obstacle(t["obstacle"], scene);
     if (t.has("stiffness")) trocar.stiffness = positive(t["stiffness"]);
     if (t.has("damping")) trocar.damping = non_negative(t["damping"]);
     if (t.has("port_axis")) {
       trocar.port_axis = t["port_axis"].vector<3>();
       if (trocar.port_axis.norm() < 1e-9) t["port_axis"].fail("a non-zero vector");
     }
+    auto law = make_tissue<TrocarRing>(t, scene, trocar);
+    s.trocar = law;
+    s.emulator.tissue.push_back({law, obstacle});
   }
-  try {
-    s.tissue = std::make_shared<MedicalPlant>(s.emulator.plant, *s.emulator.scene, settings);
-  } catch (const std::invalid_argument& e) {
-    f.fail(e.what());
-  }
-  s.emulator.extra_joint_torque = [tissue = s.tissue](double t, const Vector7& q, const Vector7& dq, const Vector7&) {
-    return tissue->joint_torque(t, q, dq);
-  };
 }
 
 void read_controller(const Field& f, const Vector7& q_initial, ControllerSpec& c) {

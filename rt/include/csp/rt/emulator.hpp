@@ -104,11 +104,10 @@ struct ExternalWrench {
   double start = 0.0, end = 0.0, ramp = 0.0;
 };
 
-// A joint torque the plant's rigid-body and friction models do not have: the tissue a medical tool
-// works in (rt/medical_plant.hpp: the bone under a burr, the trocar's ring; set by a scenario's
-// `tissue:` section), or, in tests, an effect the emulator does not model (a torque ripple periodic
-// in position, a friction with memory, a structural vibration). It acts on the links as the friction does, so the torque sensor
-// feels it; it is evaluated in every integration substep at the substep's time t [s] and state, and
+// A joint torque the plant's rigid-body and friction models do not have, for tests of what the
+// emulator does not model (tests/gap_emulated: a torque ripple periodic in position, a friction
+// with memory, a structural vibration). It acts on the links as the friction does, so the torque
+// sensor feels it; it is evaluated in every integration substep at the substep's time t [s] and state, and
 // tau_motor is the torque the drive transmits. It runs inside the 1 kHz loop: no allocation, no
 // blocking. Empty (the default): none.
 using PlantTorque = std::function<Vector7(double t, const Vector7& q, const Vector7& dq, const Vector7& tau_motor)>;
@@ -129,12 +128,15 @@ struct EmulatorSettings {
   Vector7 joint_stiffness = default_joint_stiffness();
   Vector6 cartesian_stiffness = default_cartesian_stiffness();   // K-frame axes x y z R P Y
   std::vector<ExternalWrench> external_wrenches;
-  PlantTorque extra_joint_torque;        // off by default; a scenario sets it only through `tissue:`
+  PlantTorque extra_joint_torque;        // off by default; no scenario key sets it
   // The environment the arm touches (docs/contact.md): the scene's obstacles with a material push
   // on the arm's and the tool's capsules, every substep. Null (the default): nothing to touch. The
   // plant and internal models should carry the scene's tool (with_tool), as load_scenario does.
   std::shared_ptr<const Scene> scene;
   ContactOptions contact;
+  // Tissue laws evaluated with the scene's obstacles (a scenario's `tissue:` section; rt/medical_plant.hpp).
+  // Stateful (the bone removed): one emulator per set of elements.
+  std::vector<TissueElement> tissue;
 };
 
 // Cumulative counts over the emulator's life.
@@ -274,7 +276,7 @@ class Emulator {
                                      const Vector7& joint_damping);
   void gravity_compensation_torque();
   LinkWrenches external_link_wrenches(double t);
-  void add_contact_wrenches(double t, const LinkWrenches& scripted, LinkWrenches& total);
+  LinkWrenches with_contact_wrenches(const LinkWrenches& scripted) const;
   void enter_reflex(const ErrorSet& errors, const std::string& reason);
 
   void rebuild_internal_model();

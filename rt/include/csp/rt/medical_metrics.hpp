@@ -1,6 +1,6 @@
 // The medical metrics of a run on a scene's task (docs/medical.md), recorded cycle by cycle from
 // the published RobotState (what the robot believes: O_T_EE, O_F_ext_hat_K) and the plant's true
-// forces (the scene contact's Emulator::contact() plus the tissue's), and the figures
+// forces (Emulator::contact(): the scene's contacts and the tissue elements'), and the figures
 // `csp emulate --report DIR` writes.
 #pragma once
 
@@ -28,7 +28,7 @@ class MedicalRecorder {
   // One cycle at motion time t [s].
   void add(const RobotState& state, double t);
 
-  // The task's metrics: ultrasound (force RMS error, contact losses, path error), RCM (deviation,
+  // The task's metrics: ultrasound (force RMS error, contact losses, path error, skin indentation), RCM (deviation,
   // trocar force), drilling (thrust, breakthrough time, overshoot); each with the error of the
   // robot's estimated contact force against the true one.
   std::vector<MedicalMetric> metrics() const;
@@ -49,7 +49,7 @@ class MedicalRecorder {
 
   const Emulator& emulator_;
   std::shared_ptr<const Scene> scene_;
-  std::shared_ptr<const MedicalPlant> tissue_;
+  std::shared_ptr<const BoneUnderBurr> bone_;
   std::shared_ptr<const MedicalStatus> status_;
   MedicalControllerSpec controller_;
   std::vector<Sample> samples_;

@@ -1,16 +1,16 @@
 // The tissue the medical tools work in, as part of the emulated plant (docs/medical.md): the bone
 // a burr drills through (a thrust / feed-rate removal law over a bone layer on soft tissue) and
-// the trocar's compliant ring in the abdominal wall. Both act on the tool as forces the plant
-// feels and the robot only estimates through tau_J, through the emulator's per-substep joint
-// torque hook (EmulatorSettings::extra_joint_torque): a force F on a tool point with linear
-// Jacobian J_p enters as the joint torque J_p^T F, exactly as an external link wrench would.
+// the trocar's compliant ring in the abdominal wall. Each is a ContactElement of the scene's
+// contact engine (rt/contact.hpp): evaluated in every substep on the arm the engine has placed,
+// its force applied to the tool as any contact's, so the plant feels it and the robot only
+// estimates it through tau_J.
 #pragma once
 
-#include <memory>
 #include <optional>
 
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/io/scene.hpp"
+#include "csp/rt/contact.hpp"
 
 namespace csp::rt {
 
@@ -55,41 +55,42 @@ struct TrocarSettings {
   Vector3 port_axis = Vector3::UnitZ();   // the wall's normal at the trocar, unit
 };
 
-struct MedicalPlantSettings {
-  std::optional<BoneLayerSettings> bone;   // under the scene's burr hole (a burr_hole task)
-  std::optional<TrocarSettings> trocar;    // at the scene's trocar (an rcm_pivot task)
-};
-
-// The tissue forces on the tool of a scene, as the emulator's plant feels them.
-class MedicalPlant {
+// The bone layer under the scene's burr hole (a burr_hole task), felt by the bit's tip (the TCP)
+// along the burr axis.
+class BoneUnderBurr final : public ContactElement {
  public:
-  // `plant`: the arm as the emulator's plant (with the scene's tool). std::invalid_argument if a
-  // setting does not fit the scene's task.
-  MedicalPlant(const ModelParameters& plant, const Scene& scene, const MedicalPlantSettings& settings);
+  // std::invalid_argument if the scene's task is no burr hole or a setting is out of range.
+  BoneUnderBurr(const Scene& scene, const BoneLayerSettings& settings);
+  // Integrates the bone removal from the last call's time.
+  ToolForce force(double t, const Data& data, const Vector7& dq) override;
 
-  // EmulatorSettings::extra_joint_torque: minus the joint torque of the tissue forces (the plant
-  // subtracts it). Integrates the bone removal from the last call's time.
-  Vector7 joint_torque(double t, const Vector7& q, const Vector7& dq);
-
-  // The true force the tissue exerts on the tool [N, base frame] at the last call, and its parts.
-  const Vector3& force() const { return force_; }
-  double thrust() const { return thrust_; }                 // along the burr axis, outward
-  double tip_depth() const { return tip_depth_; }           // below the burr entry [m]
-  double trocar_offset() const { return trocar_offset_; }   // the shaft's distance from the port axis in the wall [m]
-  const BoneLayer* bone() const { return bone_ ? &*bone_ : nullptr; }
+  const BoneLayer& layer() const { return layer_; }
+  double thrust() const { return thrust_; }           // at the last call, along the burr axis, outward [N]
+  double tip_depth() const { return tip_depth_; }     // below the burr entry [m]
   std::optional<double> breakthrough_time() const { return breakthrough_time_; }
 
  private:
-  Model model_;
-  Data data_;
-  Matrix6x7 jacobian_;
-  std::optional<BoneLayer> bone_;
-  std::optional<TrocarSettings> trocar_;
+  BoneLayer layer_;
   BurrHole hole_;
-  Vector3 trocar_point_ = Vector3::Zero();
   std::optional<double> last_time_, breakthrough_time_;
-  Vector3 force_ = Vector3::Zero();
-  double thrust_ = 0.0, tip_depth_ = 0.0, trocar_offset_ = 0.0;
+  double thrust_ = 0.0, tip_depth_ = 0.0;
+};
+
+// The trocar's ring at the scene's port (an rcm_pivot task), on the shaft (the tool's z axis from
+// the flange to the tip) where it crosses the wall.
+class TrocarRing final : public ContactElement {
+ public:
+  // std::invalid_argument if the scene's task is no RCM pivot or a setting is out of range.
+  TrocarRing(const Scene& scene, const TrocarSettings& settings);
+  ToolForce force(double t, const Data& data, const Vector7& dq) override;
+
+  // The shaft's distance from the port axis in the wall at the last call [m] (0: not through it).
+  double offset() const { return offset_; }
+
+ private:
+  TrocarSettings settings_;
+  Vector3 trocar_ = Vector3::Zero();
+  double offset_ = 0.0;
 };
 
 }  // namespace csp::rt

@@ -99,9 +99,10 @@ struct Scenario {
   HandSettings hand;                   // the Franka Hand (franka::Gripper) and what it may grasp
   VacuumSettings vacuum_gripper;       // the Cobot Pump (franka::VacuumGripper)
   bool has_vacuum_gripper = false;     // the scenario mounts a Cobot Pump (a `vacuum_gripper:` section)
-  // `tissue:` the bone under the burr and the trocar ring (docs/medical.md), already hooked into
-  // emulator.extra_joint_torque: one emulator per loaded scenario (the tissue keeps its state).
-  std::shared_ptr<MedicalPlant> tissue;
+  // `tissue:` the bone under the burr and the trocar ring (docs/medical.md), already among
+  // emulator.tissue: one emulator per loaded scenario (the tissue keeps its state). Null if absent.
+  std::shared_ptr<const BoneUnderBurr> bone;
+  std::shared_ptr<const TrocarRing> trocar;
 };
 
 Scenario load_scenario(const std::string& path);
