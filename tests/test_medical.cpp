@@ -5,9 +5,12 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 
+#include "csp/planners/checker.hpp"
+#include "csp/planners/task.hpp"
 #include "csp/rt/controllers.hpp"
 #include "csp/rt/medical_controllers.hpp"
 #include "csp/rt/medical_metrics.hpp"
@@ -84,6 +87,24 @@ TEST(MedicalLaws, AxisSplitGainsActAlongAndNormalToTheAxis) {
   EXPECT_TRUE((K * across).isApprox(2000.0 * across, 1e-12));
   EXPECT_TRUE((K * turn).isApprox(50.0 * turn, 1e-12));
   EXPECT_TRUE((critical_damping(n, 400.0, 100.0, 25.0) * along).isApprox(20.0 * along, 1e-12));
+}
+
+// The null-space torque exerts no wrench at the TCP: J of it is zero (the kinematic projector's
+// definition), it leaves a torque that already exerts none unchanged, and removes any J^T F.
+TEST(MedicalLaws, NullSpaceTorqueExertsNoWrenchAtTheTcp) {
+  const Scenario scenario = medical_scenario("burr_hole_drilling");
+  const Model model(scenario.emulator.internal);
+  Data data;
+  forward_kinematics(model, data, scenario.emulator.q_initial);
+  Matrix6x7 J;
+  zero_jacobian(data, Frame::kEndEffector, J);
+  const Vector7 tau = Vector7::LinSpaced(-3.0, 4.0);
+  const Vector7 projected = null_space_torque(J, tau);
+  EXPECT_LT((J * projected).norm(), 1e-9 * tau.norm());
+  EXPECT_TRUE(null_space_torque(J, projected).isApprox(projected, 1e-9));
+  Vector6 wrench;
+  wrench << 3.0, -2.0, 7.5, 0.4, -0.3, 0.2;
+  EXPECT_LT(null_space_torque(J, J.transpose() * wrench).norm(), 1e-9);
 }
 
 TEST(MedicalLaws, LineOffsetIsTheShaftsDistanceFromThePivot) {
@@ -215,6 +236,8 @@ TEST(TissueElement, TrocarForceIsThePotentialsGradient) {
 struct MedicalRun {
   MotionResult result;
   std::vector<MedicalMetric> metrics;
+  RobotState last;       // the last published state (a reflex's)
+  double last_t = 0.0;   // its motion time [s]
   double metric(const std::string& name) const {
     for (const MedicalMetric& m : metrics)
       if (m.name == name) return m.value;
@@ -223,31 +246,37 @@ struct MedicalRun {
   }
 };
 
-MedicalRun run(const Scenario& scenario) {
+// The scenario on the emulator with its metrics; `watch` sees each published state at motion time t.
+MedicalRun run(const Scenario& scenario, const std::function<void(const RobotState&, double t)>& watch = {}) {
   Emulator emulator(scenario.emulator);
   const BuiltinController builtin = make_controller(scenario.controller, scenario.controller_faults, emulator);
   MedicalRecorder recorder(scenario, emulator, builtin.status);
   const uint64_t start_ms = emulator.state().time.toMSec();
   LoopOptions options;
   options.max_duration = scenario.duration;
-  options.observer = [&](const RobotState& state, const CycleInfo&) {
-    recorder.add(state, static_cast<double>(state.time.toMSec() - start_ms) * 1e-3);
-  };
   MedicalRun r;
+  options.observer = [&](const RobotState& state, const CycleInfo&) {
+    r.last = state;
+    r.last_t = static_cast<double>(state.time.toMSec() - start_ms) * 1e-3;
+    recorder.add(state, r.last_t);
+    if (watch) watch(state, r.last_t);
+  };
   r.result = run_motion(emulator, builtin.mode, builtin.controller, options);
   r.metrics = recorder.metrics();
   return r;
 }
 
 // setCollisionBehavior's force thresholds (contact `lower`, collision `upper`, N) below what the
-// scenario needs end it in libfranka's cartesian_reflex.
+// scenario needs end it in libfranka's cartesian_reflex, tripped by the force along the tool's axis
+// (K's z: the probe's or the drill's push on the tissue), not by another component of the estimate.
 void expect_cartesian_reflex(Scenario s, double lower, double upper) {
   CollisionBehavior& c = s.emulator.collision;
   c.lower_force_acceleration = c.lower_force_nominal = Vector6::Constant(lower);
   c.upper_force_acceleration = c.upper_force_nominal = Vector6::Constant(upper);
   const MedicalRun r = run(s);
-  ASSERT_TRUE(r.result.reflex);
+  EXPECT_TRUE(r.result.reflex);
   EXPECT_TRUE(r.result.errors.has(Error::cartesian_reflex)) << std::string(r.result.errors);
+  EXPECT_GT(std::abs(r.last.K_F_ext_hat_K[2]), upper);
 }
 
 // Drilling with breakthrough detection stops within 1.5 mm past the bone, or before it with less
@@ -272,7 +301,9 @@ TEST(MedicalScenarios, DrillingStopsAtBreakthroughOnlyWithDetection) {
 }
 
 // The scans at 8 N on the breathing abdomen and on the thigh: within 1.5 N RMS of the commanded force, no contact
-// lost, the path within 2 mm; a Cartesian force threshold below the 8 N it needs: cartesian_reflex.
+// lost, the path within 2 mm; a Cartesian force threshold below the 8 N it needs: cartesian_reflex, on the
+// contact force along the probe (measured: the probe reaches the skin at 2.11 s, the reflex trips at 2.36 s
+// with 5.0 N along K's z; before the contact the estimate stays below 1.2 N, under the 3 N contact level).
 TEST(MedicalScenarios, UltrasoundScanHoldsItsForceAndTripsBelowIt) {
   for (const char* name : {"ultrasound_abdomen_scan", "doppler_thigh_scan"}) {
     Scenario s = medical_scenario(name);
@@ -289,7 +320,88 @@ TEST(MedicalScenarios, UltrasoundScanHoldsItsForceAndTripsBelowIt) {
   expect_cartesian_reflex(low, 3.0, 5.0);
 }
 
-// A collision threshold on the Cartesian force below the drill's thrust: libfranka's cartesian_reflex.
+// How a scan followed its planned path q_p, over the scan (motion time >= settle): the TCP's largest
+// distance from FK(q_p) normal to the probe axis (along it the force rules: the probe is pressed
+// into the skin the path lies on); the largest self-motion away from q_p, the null-space part
+// (1 - J^+ J)(q - q_p) (what the Cartesian impedance leaves free); every 0.1 s, the least clearance
+// of the arm and of q_p by the planner's own checker in the task's contact scene (planners/task.hpp:
+// the links keep the patient's clearance, the tool may touch, the probe's tip is exempt from the skin).
+struct PathFollowing {
+  MedicalRun run;
+  double lateral_max = 0.0;   // [m]
+  double posture_max = 0.0;   // [rad]
+  double clearance_min = INFINITY, planned_clearance_min = INFINITY;   // [m]
+};
+
+PathFollowing follow_path(const Scenario& s) {
+  const MedicalControllerSpec& m = s.controller.medical;
+  const Scene& scene = *s.emulator.scene;
+  const Model model(s.emulator.plant);
+  Data data;
+  const Vector3 n = std::get<UltrasoundScan>(scene.task).tool_axis.normalized();
+  planners::TaskConstraint task(model, scene);
+  planners::ClearanceChecker checker(model, planners::contact_scene(scene, task.contact_obstacle()));
+  PathFollowing f;
+  f.run = run(s, [&](const RobotState& state, double t) {
+    if (t < m.settle) return;
+    Vector7 q_p, dq_p, ddq_p;
+    m.path->evaluate(Vector7::Zero(), t - m.settle, q_p, dq_p, ddq_p);
+    forward_kinematics(model, data, q_p);
+    const Vector3 planned = frame_pose(data, Frame::kEndEffector).translation;
+    const Vector7 q(state.q.data());
+    forward_kinematics(model, data, q);
+    const Vector3 d = frame_pose(data, Frame::kEndEffector).translation - planned;
+    f.lateral_max = std::max(f.lateral_max, (d - n.dot(d) * n).norm());
+    Matrix6x7 J;
+    zero_jacobian(data, Frame::kEndEffector, J);
+    // The kinematic projector is symmetric: 1 - J^T (J J^T)^-1 J = 1 - J^+ J, on a joint step too.
+    f.posture_max = std::max(f.posture_max, null_space_torque(J, q - q_p).norm());
+    if (std::lround(t * 1e3) % 100 == 0) {
+      f.clearance_min = std::min(f.clearance_min, checker.check(q).clearance);
+      f.planned_clearance_min = std::min(f.planned_clearance_min, checker.check(q_p).clearance);
+    }
+  });
+  return f;
+}
+
+// The scans along the planner's task paths (configs/scenarios/medical/plans), whole:
+// - the force held within 1.5 N RMS, no contact lost;
+// - the TCP within 3 mm of FK(q_p) normal to the probe axis (measured 1.7 / 2.1 mm: a lag along the
+//   scan of 1.5-1.9 mm, of which the skin's Coulomb friction mu F_d / k_t = 0.15 * 8 / 2000 = 0.6 mm,
+//   the rest the joints' friction the law does not compensate; across it 0.8 / 1.1 mm);
+// - the self-motion within twice the joints' stiction band |tau_breakaway| / k_n (0.012 rad at
+//   k_n = 50: a joint at rest holds up to its breakaway torque against the null-space spring; the
+//   projector couples the joints, so the band is a scale, not a bound: measured 1.1 / 1.7 band, the
+//   thigh's stick-slip changing with the reference's last digits (1.0 band on the 1 kHz rows, 1.7 on
+//   the shipped 100 Hz ones, 3e-6 rad apart)); without the null-space term nothing pulls the hover
+//   pose's self-motion to the planned posture (measured 0.11 / 0.27 rad, 8 / 12 times more);
+// - the clearance the planner checked, less what the contact takes: the arm is the plan pushed into
+//   the skin by the indentation (8 N: 13 mm on the abdomen, 7 mm on the thigh), the breathing (4 mm)
+//   and the lateral error, so at most 20 mm less (measured 0.057 against the plan's 0.075 m, the
+//   probe holder over the abdomen; 0.039 against 0.040 m on the thigh).
+TEST(MedicalScenarios, ScansFollowThePlannedPathAndItsPosture) {
+  for (const char* name : {"ultrasound_abdomen_scan", "doppler_thigh_scan"}) {
+    Scenario s = medical_scenario(name);
+    ASSERT_TRUE(s.controller.medical.path) << name;
+    const PathFollowing held = follow_path(s);
+    ASSERT_FALSE(held.run.result.reflex) << name << ": " << held.run.result.reason;
+    EXPECT_LT(held.run.metric("contact force RMS error (scan)"), 1.5) << name;
+    EXPECT_EQ(held.run.metric("contact losses"), 0.0) << name;
+    EXPECT_LT(held.lateral_max, 3e-3) << name;
+    const double stiction_band = s.emulator.plant.friction.breakaway.norm() / s.controller.medical.null_space_stiffness;
+    EXPECT_LT(held.posture_max, 2.0 * stiction_band) << name;
+    EXPECT_GT(held.clearance_min, 0.0) << name;
+    EXPECT_GT(held.clearance_min, held.planned_clearance_min - 0.02) << name;
+
+    s.controller.medical.null_space_stiffness = 0.0;
+    const PathFollowing drifting = follow_path(s);
+    ASSERT_FALSE(drifting.run.result.reflex) << name << ": " << drifting.run.result.reason;
+    EXPECT_GT(drifting.posture_max, 5.0 * held.posture_max) << name;
+  }
+}
+
+// A collision threshold on the Cartesian force below the drill's thrust: libfranka's cartesian_reflex
+// (measured at 7.61 s, on the thrust along the bit).
 TEST(MedicalScenarios, DrillingThrustAboveTheForceThresholdIsACartesianReflex) {
   expect_cartesian_reflex(medical_scenario("burr_hole_drilling"), 5.0, 8.0);
 }
@@ -304,17 +416,39 @@ TEST(MedicalScenarios, PivotingKeepsTheRemoteCentreOfMotion) {
   EXPECT_NEAR(r.metric("trocar force max"), 1000.0 * 1e-3 * r.metric("RCM deviation max"), 1.0);
 }
 
-// The same pivot with joint torque thresholds below what it needs (0.2 N m: less than the estimated
-// external torques the model mismatch and the trocar give from the start): joint_reflex.
-TEST(MedicalScenarios, PivotingBelowItsTorqueThresholdsIsAJointReflex) {
+// The pivot's own estimated external torques (the trocar ring on the shaft, the swinging arm's model
+// mismatch), measured on the nominal run: the peak |tau_ext_hat_filtered| per joint during the
+// insertion and during the pivot. (The estimate starts at zero and grows with the insertion's motion:
+// there is no start transient above the insertion's own values to leave out.) Thresholds 10 % below
+// the pivot's peak, on the joints where that still exceeds the insertion's peak (measured: joints 1,
+// 2, 3, 5, 7; the others keep the nominal thresholds), trip joint_reflex during the pivot (measured
+// at 3.49 s, the insertion ends at 3 s); the nominal thresholds do not trip.
+TEST(MedicalScenarios, PivotingAboveItsOwnTorqueThresholdsIsAJointReflex) {
+  constexpr double kBelowPeak = 0.9;
   Scenario s = medical_scenario("laparoscopic_pivoting");
   s.duration = 6.0;
+  const double pivot_start = s.controller.medical.insertion_time;
+  Vector7 before = Vector7::Zero(), during = Vector7::Zero();
+  const MedicalRun nominal = run(s, [&](const RobotState& state, double t) {
+    Vector7& peak = t < pivot_start ? before : during;
+    peak = peak.cwiseMax(Vector7(state.tau_ext_hat_filtered.data()).cwiseAbs());
+  });
+  ASSERT_FALSE(nominal.result.reflex) << nominal.result.reason;
+
   CollisionBehavior& c = s.emulator.collision;
-  c.lower_torque_acceleration = c.lower_torque_nominal = Vector7::Constant(0.1);
-  c.upper_torque_acceleration = c.upper_torque_nominal = Vector7::Constant(0.2);
+  int lowered = 0;
+  for (int i = 0; i < kNumJoints; ++i) {
+    const double threshold = kBelowPeak * during[i];
+    if (threshold <= before[i]) continue;
+    c.lower_torque_acceleration[i] = c.lower_torque_nominal[i] = threshold;
+    c.upper_torque_acceleration[i] = c.upper_torque_nominal[i] = threshold;
+    ++lowered;
+  }
+  ASSERT_GT(lowered, 0) << "no joint whose pivot torque exceeds its insertion torque";
   const MedicalRun r = run(s);
   ASSERT_TRUE(r.result.reflex);
   EXPECT_TRUE(r.result.errors.has(Error::joint_reflex)) << std::string(r.result.errors);
+  EXPECT_GT(r.last_t, pivot_start);
 }
 
 // --- Bad input -----------------------------------------------------------------------------------
@@ -329,6 +463,8 @@ std::string load_error(const std::string& name, const std::string& from, const s
   const auto at = text.find(from);
   EXPECT_NE(at, std::string::npos) << from;
   if (at != std::string::npos) text.replace(at, from.size(), to);
+  for (auto at = text.find("path: plans/"); at != std::string::npos; at = text.find("path: plans/", at + 1))
+    text.replace(at + 6, 0, kMedical);
   for (const char* dir : {"robots", "scenes"}) {
     const std::string relative = std::string("../../") + dir, absolute = std::string(CSP_SOURCE_DIR) + "/configs/" + dir;
     for (auto at = text.find(relative); at != std::string::npos; at = text.find(relative)) text.replace(at, relative.size(), absolute);
@@ -354,6 +490,19 @@ TEST(MedicalBadInput, EachMistakeNamesItsKey) {
   EXPECT_NE(load_error("laparoscopic_pivoting", "insertion: 0.06", "feed_rate: 0.001").find("controller.feed_rate: expected no `feed_rate` for a rcm controller"),
             std::string::npos);
   EXPECT_NE(load_error("ultrasound_abdomen_scan", "scene: ../../scenes/ultrasound_abdomen.yaml\n", "").find("a scene (`scene:`) for a cartesian_impedance_force controller"),
+            std::string::npos);
+  const std::string plan = "path: plans/ultrasound_abdomen/trajectory.csv";
+  EXPECT_NE(load_error("ultrasound_abdomen_scan", plan, "path: plans/ultrasound_abdomen/no_such.csv")
+                .find("ultrasound_abdomen_scan.yaml: controller.path: expected a joint log (docs/joint-log.md), relative to this scenario"),
+            std::string::npos);
+  EXPECT_NE(load_error("ultrasound_abdomen_scan", plan, "path: plans/doppler_femoral/trajectory.csv")
+                .find("controller.path: expected a path whose first pose is the scan's start"),
+            std::string::npos);
+  EXPECT_NE(load_error("ultrasound_abdomen_scan", "  " + plan + "\n", "")
+                .find("controller.null_space_stiffness: expected a `path` too"),
+            std::string::npos);
+  EXPECT_NE(load_error("laparoscopic_pivoting", "insertion: 0.06", "path: plans/ultrasound_abdomen/trajectory.csv")
+                .find("controller.path: expected no `path` for a rcm controller"),
             std::string::npos);
 }
 

@@ -3,6 +3,7 @@
 // Gaz et al.'s commanded velocities), planted violations each found alone at the right time and
 // joint, broken files refused with their line and column, trajectory files played by the emulator's
 // scenarios, and the files of a plan run by `csp emulate` as they are.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -531,6 +532,38 @@ TEST(PlanCommand, TheSamePlanTwiceAndRebuiltGivesByteIdenticalFiles) {
       EXPECT_EQ(runs[1][name], bytes) << command[0] << ": " << name << " differs between two processes";
       EXPECT_EQ(runs[2][name], bytes) << command[0] << ": " << name << " differs when rebuilt";
     }
+  }
+}
+
+// The task paths the scan scenarios ship (configs/scenarios/medical/plans: every 10th row of the
+// plan and its last, README there) are what their plan.yaml makes today, so that a change of the
+// planner that moves them fails here until the shipped files are made again: each shipped row within
+// 1e-9 of the fresh plan's row at the same time (a -DCSP_NATIVE=OFF build rounds 4e-15 rad apart in q,
+// measured; a plan that moved differs by far more), ending where the plan ends.
+TEST(PlanCommand, ShippedScanPathsAreWhatTheirPlanMakes) {
+#ifdef CSP_SANITIZE_BUILD   // slow under the sanitizers; the Release build compares them
+  GTEST_SKIP() << "the shipped plans are compared in the Release build";
+#endif
+  for (const std::string scene : {"ultrasound_abdomen", "doppler_femoral"}) {
+    const std::string shipped = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/medical/plans/" + scene;
+    const std::string out = (temp_dir() / ("shipped_" + scene)).string();
+    const ProgramRun rebuild = run_csp({"plan", "rebuild", shipped + "/plan.yaml", "--out", out});
+    ASSERT_EQ(rebuild.exit_code, 0) << rebuild.err;
+    const std::string stale = scene + ": the shipped trajectory.csv is stale (make it again: " + shipped + "/README.md)";
+    const JointLog made = read_joint_log_csv(out + "/trajectory.csv"), kept = read_joint_log_csv(shipped + "/trajectory.csv");
+    ASSERT_GE(kept.size(), 2u) << stale;
+    ASSERT_EQ(made.t.back(), kept.t.back()) << stale;
+    double worst = 0.0;
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      const auto row = static_cast<std::size_t>(std::lround(kept.t[k] / 1e-3));   // the plan's rows are 1 ms apart
+      ASSERT_LT(row, made.size()) << stale;
+      if (k > 0) {
+        EXPECT_LE(kept.t[k] - kept.t[k - 1], 0.01 + 1e-12) << stale;
+      }
+      worst = std::max({worst, std::abs(made.t[row] - kept.t[k]), (made.q[row] - kept.q[k]).cwiseAbs().maxCoeff(),
+                        (made.dq[row] - kept.dq[k]).cwiseAbs().maxCoeff(), (made.ddq[row] - kept.ddq[k]).cwiseAbs().maxCoeff()});
+    }
+    EXPECT_LT(worst, 1e-9) << stale;
   }
 }
 

@@ -40,6 +40,11 @@ Vector3 line_offset_from(const Vector3& point, const Vector3& axis, const Vector
   return nearest - pivot;
 }
 
+Vector7 null_space_torque(const Matrix6x7& jacobian, const Vector7& tau) {
+  const Matrix6 JJt = jacobian * jacobian.transpose();
+  return tau - jacobian.transpose() * JJt.ldlt().solve(jacobian * tau);
+}
+
 Eigen::Matrix<double, 3, 7> point_jacobian(const Matrix6x7& tcp_jacobian, const Vector3& lever) {
   Eigen::Matrix<double, 3, 7> J = tcp_jacobian.topRows<3>();
   for (int i = 0; i < kNumJoints; ++i) J.col(i) += tcp_jacobian.col(i).tail<3>().cross(lever);
@@ -97,6 +102,8 @@ class ToolFrameLaw {
     return last + (tau - last).cwiseMax(-step).cwiseMin(step);
   }
 
+  const Vector7& q() const { return q_; }
+  const Vector7& dq() const { return dq_; }
   const Transform& pose() const { return frame_pose(data_, Frame::kEndEffector); }
   const Transform& start_pose() const { return start_pose_; }
   const Matrix6x7& jacobian() const { return jacobian_; }
@@ -116,15 +123,17 @@ class ToolFrameLaw {
   bool tared_ = false;
 };
 
-// Ultrasound: Cartesian impedance normal to the tool axis n along the scan line, force PI along n.
+// Ultrasound: Cartesian impedance normal to the tool axis n along the scan, force PI along n.
 // F = -K (x - x_d) - D (xdot - xdot_d) + n F_n,  K = k_t (1 - n n^T) + 0 n n^T (+ k_r on orientation),
 // D = 2 sqrt(k_t) (1 - n n^T) + d_n n n^T,  F_n = AxisForcePI(F_d(t), n . F_ext_hat),
 // tau = J^T F + c. The scan waits `settle` seconds (approach and force build-up) and then moves
-// x_d from the task's start to its end at the task's speed.
+// x_d from the task's start to its end at the task's speed: along the straight line, or along the
+// planned path q_p(t - settle) with x_d its forward kinematics and a null-space spring toward q_p,
+// tau += (1 - J^T (J^T)^+) (k_n (q_p - q) - 2 sqrt(k_n) dq).
 class CartesianImpedanceForce {
  public:
   CartesianImpedanceForce(const MedicalControllerSpec& spec, double k_t, double k_r, const Model& model, const Vector7& q0)
-      : spec_(spec), law_(model, q0), pi_(spec.force_k_p, spec.force_k_i, spec.force_integral_limit) {
+      : spec_(spec), law_(model, q0), path_model_(model), pi_(spec.force_k_p, spec.force_k_i, spec.force_integral_limit) {
     const auto* scan = std::get_if<UltrasoundScan>(&spec.scene->task);
     if (!scan) throw std::invalid_argument("cartesian_impedance_force needs a scene whose task is an ultrasound_scan");
     task_ = *scan;
@@ -137,22 +146,41 @@ class CartesianImpedanceForce {
 
   Vector7 operator()(const RobotState& state, double time, double dt) {
     law_.measure(state);
-    const Vector3 line = task_.end - task_.start;
-    const double length = line.norm();
-    const double travelled = std::clamp(task_.speed * (time - spec_.settle), 0.0, length);
+    Vector3 position_d;
     Vector6 twist_d = Vector6::Zero();
-    if (travelled > 0.0 && travelled < length) twist_d.head<3>() = task_.speed * line / length;
-    const Vector3 position_d = task_.start + (length > 0.0 ? travelled / length : 0.0) * line;
+    Vector7 tau_null = Vector7::Zero();
+    if (spec_.path) {
+      // Held at the path's first sample (at rest) while settling, then played.
+      Vector7 q_p, dq_p, ddq_p;
+      spec_.path->evaluate(Vector7::Zero(), std::max(0.0, time - spec_.settle), q_p, dq_p, ddq_p);
+      forward_kinematics(path_model_, path_data_, q_p);
+      zero_jacobian(path_data_, Frame::kEndEffector, path_jacobian_);
+      const Transform& pose_p = frame_pose(path_data_, Frame::kEndEffector);
+      position_d = pose_p.translation;
+      orientation_d_ = Eigen::Quaterniond(pose_p.rotation);
+      twist_d = path_jacobian_ * dq_p;
+      const double k_n = spec_.null_space_stiffness;
+      tau_null = null_space_torque(law_.jacobian(), k_n * (q_p - law_.q()) - 2.0 * std::sqrt(k_n) * law_.dq());
+    } else {
+      const Vector3 line = task_.end - task_.start;
+      const double length = line.norm();
+      const double travelled = std::clamp(task_.speed * (time - spec_.settle), 0.0, length);
+      if (travelled > 0.0 && travelled < length) twist_d.head<3>() = task_.speed * line / length;
+      position_d = task_.start + (length > 0.0 ? travelled / length : 0.0) * line;
+    }
     const double force_d = spec_.desired_force * (1.0 - std::exp(-time / spec_.force_ramp));
     const double force_n = pi_.update(force_d, n_.dot(law_.force()), dt);
     Vector6 wrench = -stiffness_ * pose_error(law_.pose(), position_d, orientation_d_) - damping_ * (law_.twist() - twist_d);
     wrench.head<3>() += force_n * n_;
-    return law_.limited(wrench_torque(law_.jacobian(), wrench, law_.coriolis()), state);
+    return law_.limited(wrench_torque(law_.jacobian(), wrench, law_.coriolis()) + tau_null, state);
   }
 
  private:
   MedicalControllerSpec spec_;
   ToolFrameLaw law_;
+  Model path_model_;   // the robot's model at the path's joints (the reference's own workspace)
+  Data path_data_;
+  Matrix6x7 path_jacobian_;
   AxisForcePI pi_;
   UltrasoundScan task_;
   Vector3 n_;

@@ -16,6 +16,9 @@ namespace {
 
 // A trajectory file's first row may differ from initial_q by the rounding of a printed pose [rad].
 constexpr double kTrajectoryStartTolerance = 1e-6;
+// A scan path's first TCP must be the scan's start [m] with the tool axis [rad]: the planner's task
+// paths are on the task within 1e-8 (docs/planning-task-paths.md), its tests hold them to 1e-4 and 1e-3.
+constexpr double kScanPathStartTolerance = 1e-4, kScanPathAxisTolerance = 1e-3;
 
 Vector7 non_negative7(const Field& f) {
   const Vector7 v = f.vector<7>();
@@ -66,21 +69,23 @@ ModelParameters build_model(const RobotConfig& robot, const ModelOptions& option
   }
 }
 
+// A joint log file named by `f`, found relative to the scenario, as the reference it plays.
+std::shared_ptr<const JointLogReference> read_joint_log_reference(const Field& f) {
+  const std::filesystem::path file = f.text();
+  const std::string path = (file.is_absolute() ? file : std::filesystem::path(f.file()).parent_path() / file).string();
+  try {
+    return std::make_shared<JointLogReference>(read_joint_log_csv(path));
+  } catch (const JointLogError& e) {
+    f.fail("a joint log (docs/joint-log.md), relative to this scenario: " + std::string(e.what()));
+  }
+}
+
 // controller.trajectory: a ramped sine, or {file: F}, a joint log found relative to the scenario
 // that must start at initial_q.
 std::shared_ptr<const JointReference> read_trajectory(const Field& f, const Vector7& q_initial) {
   if (f.has("file")) {
     f.allow_only({"file"});
-    const std::filesystem::path file = f["file"].text();
-    const std::string path =
-        (file.is_absolute() ? file : std::filesystem::path(f.file()).parent_path() / file).string();
-    JointLog log;
-    try {
-      log = read_joint_log_csv(path);
-    } catch (const JointLogError& e) {
-      f["file"].fail("a joint log (docs/joint-log.md), relative to this scenario: " + std::string(e.what()));
-    }
-    auto reference = std::make_shared<JointLogReference>(log);
+    auto reference = read_joint_log_reference(f["file"]);
     // Where the robot starts is where the file starts: a first row elsewhere is a position step.
     const Vector7 offset = (reference->first_q() - q_initial).cwiseAbs();
     Eigen::Index joint = 0;
@@ -98,6 +103,23 @@ std::shared_ptr<const JointReference> read_trajectory(const Field& f, const Vect
   return trajectory;
 }
 
+// controller.path: the planned scan path must start where the scan does, at the scene task's start
+// with the probe along its tool axis (the robot model's forward kinematics of the first row).
+void check_scan_path(const Field& f, const JointLogReference& path, const ModelParameters& robot, const Scene& scene) {
+  const auto* scan = std::get_if<UltrasoundScan>(&scene.task);
+  if (!scan) f.fail("no `path` on the scene " + scene.path + ": its task is not an ultrasound_scan");
+  const Model model(robot);
+  Data data;
+  forward_kinematics(model, data, path.first_q());
+  const Transform& tcp = frame_pose(data, Frame::kEndEffector);
+  const double offset = (tcp.translation - scan->start).norm();
+  const double angle = std::acos(std::clamp(tcp.rotation.col(2).dot(scan->tool_axis.normalized()), -1.0, 1.0));
+  if (offset > kScanPathStartTolerance || angle > kScanPathAxisTolerance)
+    f.fail("a path whose first pose is the scan's start of " + scene.path + " (within " +
+           std::to_string(kScanPathStartTolerance) + " m, tool axis within " + std::to_string(kScanPathAxisTolerance) +
+           " rad; its TCP is " + std::to_string(offset) + " m and " + std::to_string(angle) + " rad away)");
+}
+
 // The medical controllers' keys (docs/medical.md); each only for the controller that uses it.
 void read_medical_controller(const Field& f, const std::string& type, MedicalControllerSpec& m) {
   const auto only = [&](const char* key, const char* owner) {
@@ -111,6 +133,11 @@ void read_medical_controller(const Field& f, const std::string& type, MedicalCon
   if (only("force_ramp", "cartesian_impedance_force")) m.force_ramp = positive(f["force_ramp"]);
   if (only("axis_damping", "cartesian_impedance_force")) m.axis_damping = non_negative(f["axis_damping"]);
   if (only("settle", "cartesian_impedance_force")) m.settle = non_negative(f["settle"]);
+  if (only("path", "cartesian_impedance_force")) m.path = read_joint_log_reference(f["path"]);
+  if (only("null_space_stiffness", "cartesian_impedance_force")) {
+    if (!m.path) f["null_space_stiffness"].fail("a `path` too (its joints are the null space's posture)");
+    m.null_space_stiffness = non_negative(f["null_space_stiffness"]);
+  }
   if (only("insertion", "rcm")) m.insertion = positive(f["insertion"]);
   if (only("insertion_time", "rcm")) m.insertion_time = positive(f["insertion_time"]);
   if (only("pivot_amplitude", "rcm")) m.pivot_amplitude = non_negative(f["pivot_amplitude"]);
@@ -195,9 +222,9 @@ void read_tissue(const Field& top, Scenario& s) {
 void read_controller(const Field& f, const Vector7& q_initial, ControllerSpec& c) {
   f.allow_only({"type", "stiffness", "damping", "feedforward", "translational_stiffness", "rotational_stiffness",
                 "trajectory", "desired_force", "force_k_p", "force_k_i", "force_integral_limit", "force_ramp",
-                "axis_damping", "settle", "insertion", "insertion_time", "pivot_amplitude", "pivot_frequency_hz",
-                "rcm_stiffness", "feed_rate", "approach_speed", "axial_stiffness", "max_thrust",
-                "breakthrough_detection", "breakthrough"});
+                "axis_damping", "settle", "path", "null_space_stiffness", "insertion", "insertion_time",
+                "pivot_amplitude", "pivot_frequency_hz", "rcm_stiffness", "feed_rate", "approach_speed",
+                "axial_stiffness", "max_thrust", "breakthrough_detection", "breakthrough"});
   c.type = f["type"].text();
   if (c.type != "float" && c.type != "joint_impedance" && c.type != "joint_position" &&
       c.type != "joint_velocity" && c.type != "cartesian_impedance" && !is_medical_controller(c.type))
@@ -440,6 +467,8 @@ Scenario load_scenario(const std::string& path) {
   s.controller.medical.scene = scene;
   if (is_medical_controller(s.controller.type) && !scene)
     top["controller"]["type"].fail("a scene (`scene:`) for a " + s.controller.type + " controller: it follows the scene's task");
+  if (s.controller.medical.path)
+    check_scan_path(top["controller"]["path"], *s.controller.medical.path, s.emulator.internal, *scene);
   if (s.controller.type == "drilling" && !top["controller"].has("feed_rate"))
     if (const auto* hole = std::get_if<BurrHole>(&scene->task)) s.controller.medical.feed_rate = hole->speed;
   if (top.has("tissue")) read_tissue(top, s);

@@ -2,8 +2,8 @@
 // controller on libfranka (Robot::control(torque_cb) with franka::Model): the robot adds gravity,
 // the controller returns J^T F + Coriolis. Each follows its scene's task (csp/io/scene.hpp):
 //   cartesian_impedance_force  ultrasound: impedance normal to the tool axis, force PI along it,
-//                              along the scan line (libfranka's cartesian_impedance_control and
-//                              force_control examples combined)
+//                              along the scan line or the planner's task path (libfranka's
+//                              cartesian_impedance_control and force_control examples combined)
 //   rcm                        laparoscopy: tip impedance plus a spring keeping the shaft through the trocar
 //   drilling                   burr hole: feed-rate advance along the burr axis, thrust limit,
 //                              breakthrough detection
@@ -20,6 +20,8 @@
 #include "csp/rt/robot_state.hpp"
 
 namespace csp::rt {
+
+class JointLogReference;   // csp/rt/scenario.hpp: a joint log played in time
 
 // Pose error of `pose` from (position_d, orientation_d) in the base frame, (position; rotation
 // vector), as libfranka's cartesian_impedance_control example forms it: the orientation error is
@@ -41,6 +43,12 @@ Vector7 wrench_torque(const Matrix6x7& jacobian, const Vector6& wrench, const Ve
 // The point c of the line through `point` along unit `axis` nearest to `pivot`, and the lateral
 // offset c - pivot (normal to the axis): the shaft's deviation from a remote centre of motion.
 Vector3 line_offset_from(const Vector3& point, const Vector3& axis, const Vector3& pivot);
+
+// The part of a joint torque that exerts no wrench at a frame with Jacobian J (full row rank):
+// (1 - J^T (J^T)^+) tau, (J^T)^+ = (J J^T)^-1 J the Moore-Penrose pseudo-inverse of J^T. The
+// null-space projector of franka_ros' cartesian_impedance_example_controller (a kinematic one: J of
+// the projected torque is zero; Khatib's dynamically consistent projector would weight it by M^-1).
+Vector7 null_space_torque(const Matrix6x7& jacobian, const Vector7& tau);
 
 // The linear Jacobian of a point fixed to the tool at `lever` (base frame) from the TCP, given the
 // TCP's 6x7 base-frame Jacobian: J_v + J_w x lever, column by column.
@@ -93,6 +101,11 @@ struct MedicalControllerSpec {
   double force_ramp = 1.0;              // [s] first-order ramp of the desired force (force_control's filter)
   double axis_damping = 100.0;          // [N s/m] along the tool axis
   double settle = 1.5;                  // [s] in contact before the scan starts
+  // The planner's task path (`path:`, `csp plan task`'s trajectory.csv), played from `settle` on:
+  // the forward kinematics of its joints is the scan's pose reference, its joints the posture the
+  // null-space spring holds. Without it the scan follows the scene's straight line.
+  std::shared_ptr<const JointLogReference> path;
+  double null_space_stiffness = 50.0;   // [N m/rad] toward the path's joints, in the task's null space
   // rcm
   double insertion = 0.06;              // [m] tip depth below the trocar
   double insertion_time = 3.0;          // [s] from the start pose to the depth
