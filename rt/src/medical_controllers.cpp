@@ -45,12 +45,6 @@ Vector7 null_space_torque(const Matrix6x7& jacobian, const Vector7& tau) {
   return tau - jacobian.transpose() * JJt.ldlt().solve(jacobian * tau);
 }
 
-Eigen::Matrix<double, 3, 7> point_jacobian(const Matrix6x7& tcp_jacobian, const Vector3& lever) {
-  Eigen::Matrix<double, 3, 7> J = tcp_jacobian.topRows<3>();
-  for (int i = 0; i < kNumJoints; ++i) J.col(i) += tcp_jacobian.col(i).tail<3>().cross(lever);
-  return J;
-}
-
 double AxisForcePI::update(double desired, double measured, double dt) {
   const double error = desired - measured;
   integral_ = std::clamp(integral_ + k_i_ * error * dt, -limit_, limit_);
@@ -105,6 +99,8 @@ class ToolFrameLaw {
   const Vector7& q() const { return q_; }
   const Vector7& dq() const { return dq_; }
   const Transform& pose() const { return frame_pose(data_, Frame::kEndEffector); }
+  // The linear Jacobian of a point of the tool (base frame), by the robot's model.
+  Matrix3x7 point_jacobian(const Vector3& point) const { return csp::point_jacobian(data_, kNumJoints, point); }
   const Transform& start_pose() const { return start_pose_; }
   const Matrix6x7& jacobian() const { return jacobian_; }
   const Vector6& twist() const { return twist_; }
@@ -237,7 +233,7 @@ class RcmController {
     const double inserted = (tip - trocar_).dot(axis);
     if (inserted > 0.0 && inserted < shaft_length_) {
       const Vector3 offset = line_offset_from(tip, axis, trocar_);
-      const Eigen::Matrix<double, 3, 7> shaft_point = point_jacobian(law_.jacobian(), (trocar_ + offset) - tip);
+      const Matrix3x7 shaft_point = law_.point_jacobian(trocar_ + offset);
       const Matrix3 lateral = Matrix3::Identity() - axis * axis.transpose();
       const Vector3 force = -spec_.rcm_stiffness * offset -
                             2.0 * std::sqrt(spec_.rcm_stiffness) * lateral * (shaft_point * vector_of(state.dq));

@@ -50,10 +50,6 @@ Vector3 line_offset_from(const Vector3& point, const Vector3& axis, const Vector
 // the projected torque is zero; Khatib's dynamically consistent projector would weight it by M^-1).
 Vector7 null_space_torque(const Matrix6x7& jacobian, const Vector7& tau);
 
-// The linear Jacobian of a point fixed to the tool at `lever` (base frame) from the TCP, given the
-// TCP's 6x7 base-frame Jacobian: J_v + J_w x lever, column by column.
-Eigen::Matrix<double, 3, 7> point_jacobian(const Matrix6x7& tcp_jacobian, const Vector3& lever);
-
 // The force PI along the tool axis (libfranka's force_control: feed-forward plus PI on the error,
 // here on the force rather than on the joint torques): F = F_d + k_p (F_d - f) + k_i int (F_d - f) dt,
 // the integral clamped to +-integral_limit (anti-windup while the probe is not yet in contact).
