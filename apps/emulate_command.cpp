@@ -139,8 +139,10 @@ int run_emulate(const EmulateArguments& args) {
               static_cast<unsigned long long>(counters.lost_commands), counters.max_consecutive_lost);
   summary.print();
   if (medical) {
-    for (const rt::MedicalMetric& m : medical->metrics())
-      std::printf("  %-50s %10.3f %s\n", m.name.c_str(), m.value, m.unit.c_str());
+    for (const rt::MedicalMetric& m : medical->metrics()) {
+      if (std::isnan(m.value)) std::printf("  %-50s %10s\n", m.name.c_str(), "none");   // it did not happen
+      else std::printf("  %-50s %10.3f %s\n", m.name.c_str(), m.value, m.unit.c_str());
+    }
     if (!args.report.empty()) {
       medical->write_figures(args.report);
       std::printf("  figures: %s/force.svg, path.svg, penetration.svg\n", args.report.c_str());

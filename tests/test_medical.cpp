@@ -231,6 +231,61 @@ TEST(TissueElement, TrocarForceIsThePotentialsGradient) {
   }
 }
 
+// A tissue element inside the contact engine: with the bit 0.1 mm into the skull at the burr
+// entry, the bone layer's law pushes it back with k d = 20 N along the burr axis, the engine puts
+// that force on the tool (O_F_tool) and on link 7 (its link wrench: RNEA's f_ext gives the joints
+// -J^T F, the joint torque of that force), and leaves the skull to the element for the bit alone:
+// without the element the same pose is the skull's rigid contact. An element naming no obstacle
+// of the scene is refused, naming it.
+TEST(TissueElement, TheEngineAppliesItsForceAndLeavesItsObstacleToIt) {
+  const Scenario s = medical_scenario("burr_hole_drilling");
+  const auto& hole = std::get<BurrHole>(s.emulator.scene->task);
+  const Model model(s.emulator.plant);
+  Data data;
+  Vector7 q = s.emulator.q_initial;
+  forward_kinematics(model, data, q);
+  const Matrix3 aligned = frame_pose(data, Frame::kEndEffector).rotation;   // the bit along the burr axis
+  for (int k = 0; k < 200; ++k) {   // resolved rate: the tip 0.1 mm below the entry
+    forward_kinematics(model, data, q);
+    Matrix6x7 J;
+    zero_jacobian(data, Frame::kEndEffector, J);
+    const Transform& tcp = frame_pose(data, Frame::kEndEffector);
+    Vector6 error;
+    error << hole.entry - 1e-4 * hole.axis - tcp.translation, rotation_vector(tcp.rotation, aligned);
+    q += J.transpose() * (J * J.transpose()).ldlt().solve(error);
+  }
+  const BoneLayerSettings settings;
+  auto bone = std::make_shared<BoneUnderBurr>(*s.emulator.scene, settings);
+  SceneContact engine(s.emulator.scene, s.emulator.contact, {{bone, "skull"}});
+  ContactState state = engine.initial_state();
+  engine.evaluate(model, data, 0.0, q, Vector7::Zero(), state);
+  const Vector3 expected = settings.stiffness * 1e-4 * hole.axis;
+  EXPECT_NEAR(bone->tip_depth(), 1e-4, 1e-9);
+  EXPECT_LT((state.tissue[0].force - expected).norm(), 1e-6 * expected.norm());
+  EXPECT_EQ(state.active_contacts, 0);   // the skull's rigid law does not touch the bit
+  EXPECT_LT((state.O_F_tool.head<3>() + expected).norm(), 1e-9);
+  Vector7 with_force, without;
+  rnea(model, data, q, Vector7::Zero(), Vector7::Zero(), state.link_wrenches, with_force);
+  rnea(model, data, q, Vector7::Zero(), Vector7::Zero(), without);
+  forward_kinematics(model, data, q);
+  Matrix6x7 J;
+  zero_jacobian(data, Frame::kEndEffector, J);
+  EXPECT_LT((without - with_force - J.topRows<3>().transpose() * expected).norm(), 1e-9);
+
+  SceneContact rigid(s.emulator.scene, s.emulator.contact);
+  ContactState rigid_state = rigid.initial_state();
+  rigid.evaluate(model, data, 0.0, q, Vector7::Zero(), rigid_state);
+  ASSERT_GE(rigid_state.active_contacts, 1);
+  EXPECT_EQ(s.emulator.scene->obstacles[rigid_state.contacts[0].obstacle].name, "skull");
+
+  try {
+    SceneContact wrong(s.emulator.scene, s.emulator.contact, {{bone, "skul"}});
+    ADD_FAILURE() << "an element naming no obstacle was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no obstacle `skul`"), std::string::npos) << e.what();
+  }
+}
+
 // --- The scenarios ------------------------------------------------------------------------------
 
 struct MedicalRun {
