@@ -30,6 +30,21 @@ Vector3 rotation_vector(const Matrix3& R0, const Matrix3& R1) {
   return delta.angle() * delta.axis();
 }
 
+// The joints that put the TCP at `position` with `rotation`, by resolved-rate steps from q.
+Vector7 tcp_placed_at(const Model& model, Vector7 q, const Vector3& position, const Matrix3& rotation) {
+  Data data;
+  for (int k = 0; k < 200; ++k) {
+    forward_kinematics(model, data, q);
+    Matrix6x7 J;
+    zero_jacobian(data, Frame::kEndEffector, J);
+    const Transform& tcp = frame_pose(data, Frame::kEndEffector);
+    Vector6 error;
+    error << position - tcp.translation, rotation_vector(tcp.rotation, rotation);
+    q += J.transpose() * (J * J.transpose()).ldlt().solve(error);
+  }
+  return q;
+}
+
 // --- The controllers' laws --------------------------------------------------------------------
 
 // tau = J^T F + c: the torque's virtual work tau . dq equals F's on the TCP twist, the twist taken
@@ -203,15 +218,7 @@ TEST(TissueElement, TrocarForceIsThePotentialsGradient) {
   Vector7 q = scenario.emulator.q_initial;
   forward_kinematics(model, data, q);
   const Matrix3 vertical = frame_pose(data, Frame::kEndEffector).rotation;   // the shaft along -z
-  for (int k = 0; k < 200; ++k) {   // resolved rate: the tip 6 cm below the trocar and 4 mm aside, shaft vertical
-    forward_kinematics(model, data, q);
-    Matrix6x7 J;
-    zero_jacobian(data, Frame::kEndEffector, J);
-    const Transform& tcp = frame_pose(data, Frame::kEndEffector);
-    Vector6 error;
-    error << pivot.trocar + Vector3(0.004, 0.0, -0.06) - tcp.translation, rotation_vector(tcp.rotation, vertical);
-    q += J.transpose() * (J * J.transpose()).ldlt().solve(error);
-  }
+  q = tcp_placed_at(model, q, pivot.trocar + Vector3(0.004, 0.0, -0.06), vertical);   // the tip 6 cm below, 4 mm aside
   forward_kinematics(model, data, q);
   const ToolForce f = trocar.force(0.0, data, Vector7::Zero());
   ASSERT_NEAR(trocar.offset(), 0.004, 1e-3);
@@ -245,15 +252,7 @@ TEST(TissueElement, TheEngineAppliesItsForceAndLeavesItsObstacleToIt) {
   Vector7 q = s.emulator.q_initial;
   forward_kinematics(model, data, q);
   const Matrix3 aligned = frame_pose(data, Frame::kEndEffector).rotation;   // the bit along the burr axis
-  for (int k = 0; k < 200; ++k) {   // resolved rate: the tip 0.1 mm below the entry
-    forward_kinematics(model, data, q);
-    Matrix6x7 J;
-    zero_jacobian(data, Frame::kEndEffector, J);
-    const Transform& tcp = frame_pose(data, Frame::kEndEffector);
-    Vector6 error;
-    error << hole.entry - 1e-4 * hole.axis - tcp.translation, rotation_vector(tcp.rotation, aligned);
-    q += J.transpose() * (J * J.transpose()).ldlt().solve(error);
-  }
+  q = tcp_placed_at(model, q, hole.entry - 1e-4 * hole.axis, aligned);   // the tip 0.1 mm below the entry
   const BoneLayerSettings settings;
   auto bone = std::make_shared<BoneUnderBurr>(*s.emulator.scene, settings);
   SceneContact engine(s.emulator.scene, s.emulator.contact, {{bone, "skull"}});
