@@ -22,8 +22,8 @@ constexpr double kHorizon = 2.0 * kDeltaT;
 // Pairs this close are watched for a contact within the horizon: 1 cm in 2 ms is 5 m/s, faster
 // than any point of a Panda moves (its TCP's limit is 1.7 m/s, libfranka's kMaxTranslationalVelocity) [m].
 constexpr double kLookAhead = 1e-2;
-// Newton steps of the implicit dissipation step before it takes its iterate (a safety net: the
-// tests and the benchmark see 0 to 4).
+// Newton steps of the implicit dissipation step before it takes its iterate (a safety net: pressing
+// and sliding take 0 to 4, the tests' impacts on stiff materials up to 11).
 constexpr int kMaxNewtonIterations = 20;
 
 // The link a capsule's frame moves with (1..7), 0 for the base.
