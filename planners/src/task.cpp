@@ -227,14 +227,7 @@ bool TaskConstraint::within_ranges(const Vector7& q) {
 }
 
 Scene contact_scene(const Scene& scene, const std::string& contact_obstacle) {
-  // The tool's tip capsule: the one whose end cap is nearest to the TCP.
-  const Vector3 tcp = scene.tool.F_T_EE.translation;
-  const NamedCapsule* tip = nullptr;
-  double best = std::numeric_limits<double>::infinity();
-  for (const NamedCapsule& c : scene.tool.capsules) {
-    const double d = std::min((c.capsule.a - tcp).norm(), (c.capsule.b - tcp).norm()) - c.capsule.radius;
-    if (d < best) best = d, tip = &c;
-  }
+  const int tip = tool_tip_capsule(scene.tool);
   Scene out = scene;
   out.clearance[std::string(kContactClass)] = 0.0;
   std::vector<Obstacle> touched;
@@ -247,7 +240,7 @@ Scene contact_scene(const Scene& scene, const std::string& contact_obstacle) {
     copy.exempt.clear();
     for (const LinkCapsule& link : franka_arm_capsules()) copy.exempt.emplace_back(link.name);
     // ... and the tip enters the contact obstacle (probe face on the skin, shaft through the port, bit at the bone).
-    if (o.name == contact_obstacle && tip != nullptr) copy.exempt.push_back(tip->name);
+    if (o.name == contact_obstacle && tip >= 0) copy.exempt.push_back(scene.tool.capsules[tip].name);
     for (const NamedCapsule& c : scene.tool.capsules) o.exempt.push_back(c.name);
     touched.push_back(std::move(copy));
   }

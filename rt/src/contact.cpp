@@ -53,13 +53,16 @@ Capsule shifted(Capsule c, const Vector3& by) {
   return c;
 }
 
-// The tool capsule a tissue element takes over: the one whose end lies nearest the TCP (its
-// working end: the burr's bit, the instrument's shaft tip).
-int tool_tip_capsule(const std::vector<FrameCapsule>& capsules, const Vector3& tcp) {
-  int tip = -1;
-  for (int c = kNumArmCapsules; c < static_cast<int>(capsules.size()); ++c)
-    if (tip < 0 || (capsules[c].local.b - tcp).norm() < (capsules[tip].local.b - tcp).norm()) tip = c;
-  return tip;
+// A contact's motion relative to the surface at joint velocity v: the separating speed u (along
+// the normal) and the slip w (in the tangent plane).
+struct RelativeMotion {
+  double u;
+  Vector3 w;
+};
+RelativeMotion relative_motion(const ContactPoint& c, const Vector7& v) {
+  const Vector3 r = c.jacobian * v - c.surface_velocity;
+  const double u = c.normal.dot(r);
+  return {u, r - u * c.normal};
 }
 
 // psi'(u) of the Hunt-Crossley damping at separating speed u: the normal force is
@@ -98,18 +101,17 @@ SceneContact::SceneContact(std::shared_ptr<const Scene> scene, const ContactOpti
     const std::optional<Aabb> box = shape_box(o.shape);
     obstacle_box_.push_back(box ? grown(*box, o.motion.amplitude) : Aabb{});
   }
-  // The pairs a tissue element replaces: its obstacle against the tool's working end.
+  // The pairs a tissue element replaces: its obstacle against the tool's working end (after the
+  // arm's capsules in capsules_).
   std::vector<Pair> replaced;
+  const int tip = tool_tip_capsule(scene_->tool);
   for (const TissueElement& element : tissue_) {
     if (!element.law) throw std::invalid_argument("contact: a tissue element without a law");
-    const auto& obstacles = scene_->obstacles;
-    const auto found = std::find_if(obstacles.begin(), obstacles.end(),
-                                    [&](const Obstacle& o) { return o.name == element.obstacle; });
-    if (found == obstacles.end())
+    const int obstacle = scene_->obstacle_index(element.obstacle);
+    if (obstacle < 0)
       throw std::invalid_argument(scene_->path + ": no obstacle `" + element.obstacle + "` for a tissue element");
-    const int tip = tool_tip_capsule(capsules_, scene_->tool.F_T_EE.translation);
     if (tip < 0) throw std::invalid_argument(scene_->path + ": a tissue element needs a tool with capsules (its working end)");
-    replaced.push_back({tip, static_cast<int>(found - obstacles.begin())});
+    replaced.push_back({kNumArmCapsules + tip, obstacle});
   }
   for (int c = 0; c < static_cast<int>(capsules_.size()); ++c) {
     if (link_of(capsules_[c].frame) == 0) continue;   // the base capsule cannot move: nothing to push
@@ -237,15 +239,12 @@ Vector7 SceneContact::dissipate(const Data& data, const Matrix7& M, const Vector
                                 double h, ContactState& state) const {
   const double v_s = options_.friction_velocity;
   const std::span<const ContactPoint> contacts(state.contacts.data(), static_cast<std::size_t>(state.active_contacts));
-  // Phi(v), contact by contact in the contact's relative velocity r = J v - surface velocity:
-  // separating speed u = n . r, slip w = r - u n.
+  // Phi(v), contact by contact in the contact's separating speed u and slip w.
   auto objective = [&](const Vector7& v) {
     double phi = 0.5 * (v - v_free).dot(M * (v - v_free));
     for (const ContactPoint& c : contacts) {
-      const Vector3 r = c.jacobian * v - c.surface_velocity;
-      const double u = c.normal.dot(r);
-      phi += h * (damping_potential(c.elastic_force, c.damping, u) +
-                  c.friction_limit * std::sqrt((r - u * c.normal).squaredNorm() + v_s * v_s));
+      const auto [u, w] = relative_motion(c, v);
+      phi += h * (damping_potential(c.elastic_force, c.damping, u) + c.friction_limit * std::sqrt(w.squaredNorm() + v_s * v_s));
     }
     return phi;
   };
@@ -261,9 +260,7 @@ Vector7 SceneContact::dissipate(const Data& data, const Matrix7& M, const Vector
     Vector7 gradient = M * (v - v_free);
     Matrix7 hessian = M;
     for (const ContactPoint& c : contacts) {
-      const Vector3 r = c.jacobian * v - c.surface_velocity;
-      const double u = c.normal.dot(r);
-      const Vector3 w = r - u * c.normal;
+      const auto [u, w] = relative_motion(c, v);
       const double rho = std::sqrt(w.squaredNorm() + v_s * v_s);
       const Vector3 slope = damping_slope_force(c.elastic_force, c.damping, u) * c.normal + c.friction_limit / rho * w;
       Matrix3 curvature = (c.friction_limit / rho) *
@@ -303,10 +300,9 @@ void SceneContact::add_dissipative_forces(const Data& data, const Vector7& v, Co
   const double v_s = options_.friction_velocity;
   for (int i = 0; i < state.active_contacts; ++i) {
     ContactPoint& c = state.contacts[i];
-    const Vector3 r = c.jacobian * v - c.surface_velocity;
-    const double u = c.normal.dot(r);
+    const auto [u, w] = relative_motion(c, v);
     const double damping_force = -damping_slope_force(c.elastic_force, c.damping, u);   // along the normal
-    const Vector3 friction = regularized_friction(1.0, c.friction_limit, r - u * c.normal, v_s);
+    const Vector3 friction = regularized_friction(1.0, c.friction_limit, w, v_s);
     const Vector3 force = damping_force * c.normal + friction;
     c.normal_force += damping_force;
     c.force += force;
@@ -320,7 +316,6 @@ int SceneContact::required_substeps(const Model& plant, Data& data, const Vector
   const bool tissue_stiff = std::any_of(state.tissue.begin(), state.tissue.end(),
                                         [](const ToolForce& f) { return f.stiffness > 0.0; });
   if (state.active_contacts == 0 && state.approaching_contacts == 0 && !tissue_stiff) return base;
-  forward_kinematics(plant, data, q);
   crba(plant, data, q);
   const Eigen::LLT<Matrix7> mass(data.mass_matrix);
   // The point's inverse effective mass, bounded above for every direction by the trace of
@@ -339,6 +334,7 @@ int SceneContact::required_substeps(const Model& plant, Data& data, const Vector
     if (depth <= 0.0) continue;
     omega_squared += hunt_crossley_stiffness(*material_[c.obstacle], depth) * inverse_mass(c.jacobian);
   }
+  if (tissue_stiff) forward_kinematics(plant, data, q);   // the tissue points' Jacobians (the contacts keep theirs)
   for (const ToolForce& f : state.tissue)
     if (f.stiffness > 0.0) omega_squared += f.stiffness * inverse_mass(point_jacobian(data, kNumJoints, f.point));
   // Symplectic Euler is stable for h omega < 2: half of it (the damping and the friction are

@@ -98,6 +98,7 @@ class ToolFrameLaw {
 
   const Vector7& q() const { return q_; }
   const Vector7& dq() const { return dq_; }
+  const Model& model() const { return model_; }
   const Transform& pose() const { return frame_pose(data_, Frame::kEndEffector); }
   // The linear Jacobian of a point of the tool (base frame), by the robot's model.
   Matrix3x7 point_jacobian(const Vector3& point) const { return csp::point_jacobian(data_, kNumJoints, point); }
@@ -129,7 +130,7 @@ class ToolFrameLaw {
 class CartesianImpedanceForce {
  public:
   CartesianImpedanceForce(const MedicalControllerSpec& spec, double k_t, double k_r, const Model& model, const Vector7& q0)
-      : spec_(spec), law_(model, q0), path_model_(model), pi_(spec.force_k_p, spec.force_k_i, spec.force_integral_limit) {
+      : spec_(spec), law_(model, q0), pi_(spec.force_k_p, spec.force_k_i, spec.force_integral_limit) {
     const auto* scan = std::get_if<UltrasoundScan>(&spec.scene->task);
     if (!scan) throw std::invalid_argument("cartesian_impedance_force needs a scene whose task is an ultrasound_scan");
     task_ = *scan;
@@ -149,7 +150,7 @@ class CartesianImpedanceForce {
       // Held at the path's first sample (at rest) while settling, then played.
       Vector7 q_p, dq_p, ddq_p;
       spec_.path->evaluate(Vector7::Zero(), std::max(0.0, time - spec_.settle), q_p, dq_p, ddq_p);
-      forward_kinematics(path_model_, path_data_, q_p);
+      forward_kinematics(law_.model(), path_data_, q_p);
       zero_jacobian(path_data_, Frame::kEndEffector, path_jacobian_);
       const Transform& pose_p = frame_pose(path_data_, Frame::kEndEffector);
       position_d = pose_p.translation;
@@ -174,8 +175,7 @@ class CartesianImpedanceForce {
  private:
   MedicalControllerSpec spec_;
   ToolFrameLaw law_;
-  Model path_model_;   // the robot's model at the path's joints (the reference's own workspace)
-  Data path_data_;
+  Data path_data_;   // the robot's model at the path's joints (the reference's own workspace)
   Matrix6x7 path_jacobian_;
   AxisForcePI pi_;
   UltrasoundScan task_;

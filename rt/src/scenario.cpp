@@ -161,9 +161,8 @@ void read_medical_controller(const Field& f, const std::string& type, MedicalCon
 // The obstacle a tissue law takes over from the scene contact (with the tool's working end).
 std::string tissue_obstacle(const Field& name, const Scene& scene) {
   const std::string obstacle = name.text();
-  if (std::none_of(scene.obstacles.begin(), scene.obstacles.end(), [&](const Obstacle& o) { return o.name == obstacle; }))
-    name.fail("the name of an obstacle of the scene " + scene.path);
-  if (scene.tool.capsules.empty()) name.fail("a scene whose tool has capsules (its working end)");
+  if (scene.obstacle_index(obstacle) < 0) name.fail("the name of an obstacle of the scene " + scene.path);
+  if (tool_tip_capsule(scene.tool) < 0) name.fail("a scene whose tool has capsules (its working end)");
   return obstacle;
 }
 

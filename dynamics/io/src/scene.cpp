@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <set>
 
@@ -163,6 +164,12 @@ Vector3 ObstacleMotion::velocity(double t) const {
   return amplitude * (w * std::cos(w * t));
 }
 
+int Scene::obstacle_index(const std::string& name) const {
+  for (std::size_t i = 0; i < obstacles.size(); ++i)
+    if (obstacles[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
 const NamedPose& Scene::pose(const std::string& name) const {
   for (const auto& p : poses)
     if (p.name == name) return p;
@@ -245,6 +252,18 @@ std::vector<FrameCapsule> arm_and_tool_capsules(const Tool& tool) {
   for (const auto& c : franka_arm_capsules()) capsules.push_back({std::string(c.name), c.frame, c.capsule});
   for (const auto& c : tool.capsules) capsules.push_back({c.name, CapsuleFrame::kFlange, c.capsule});
   return capsules;
+}
+
+int tool_tip_capsule(const Tool& tool) {
+  const Vector3& tcp = tool.F_T_EE.translation;
+  int tip = -1;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < tool.capsules.size(); ++i) {
+    const Capsule& c = tool.capsules[i].capsule;
+    const double d = std::min((c.a - tcp).norm(), (c.b - tcp).norm()) - c.radius;
+    if (d < best) best = d, tip = static_cast<int>(i);
+  }
+  return tip;
 }
 
 ModelParameters with_tool(ModelParameters parameters, const Tool& tool) {

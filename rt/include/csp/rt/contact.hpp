@@ -129,7 +129,8 @@ class SceneContact {
   void add_dissipative_forces(const Data& data, const Vector7& v, ContactState& state) const;
 
   // Substeps of 1 ms a cycle needs for the contacts in `state` (docs/contact.md): at least
-  // `base`, at most options().max_substeps. Uses `data` for kinematics and the mass matrix at q.
+  // `base`, at most options().max_substeps: the contacts' Jacobians are the state's (of its
+  // substep), `data` holds the mass matrix at q and, with tissue, the kinematics.
   int required_substeps(const Model& plant, Data& data, const Vector7& q, const ContactState& state, int base) const;
 
  private:

@@ -91,6 +91,7 @@ struct Scene {
   Task task;
 
   const NamedPose& pose(const std::string& name) const;   // throws ConfigError naming the scene
+  int obstacle_index(const std::string& name) const;      // in `obstacles`; -1 if none has that name
 };
 
 Scene load_scene(const std::string& path);
@@ -98,6 +99,11 @@ Scene load_scene(const std::string& path);
 // The capsules that move with the arm when it carries `tool`: the arm's (franka_arm_capsules, in
 // link order), then the tool's on the flange.
 std::vector<FrameCapsule> arm_and_tool_capsules(const Tool& tool);
+
+// The tool's working end (the probe's face, the shaft's tip, the burr's bit): the index in
+// tool.capsules of the capsule whose end cap is nearest to the TCP; -1 for a tool without capsules.
+// The planner lets it touch the task's obstacle; the emulator's tissue laws take it over.
+int tool_tip_capsule(const Tool& tool);
 
 // The robot's parameters with the scene's tool as its end effector (mass, TCP).
 ModelParameters with_tool(ModelParameters parameters, const Tool& tool);
