@@ -41,7 +41,7 @@ std::string summary(const Diagnosis& d) {
   out += "verdict: ";
   if (d.causes.empty()) out += "no effect of the library explains the gap significantly";
   for (std::size_t i = 0; i < d.causes.size(); ++i) out.append(i ? ", " : "").append(d.causes[i]);
-  out += format("\nheld-out RMS per joint [Nm]: before");
+  out += "\nheld-out RMS per joint [Nm]: before";
   for (int j = 0; j < kNumJoints; ++j) out += format(" %.3f", d.baseline_heldout_rms[j]);
   out += "\n                             after ";
   for (int j = 0; j < kNumJoints; ++j) out += format(" %.3f", d.verdict_heldout_rms_after[j]);
