@@ -31,6 +31,7 @@ struct WorkspaceArguments {
   std::string out = "workspace_out";
   std::string points;
   int grid = 200;
+  bool progress = false;
 };
 int run_workspace(const WorkspaceArguments& args);
 

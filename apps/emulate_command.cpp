@@ -9,7 +9,9 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "progress.hpp"
 #include "csp/bridge/lcm_log.hpp"
+#include "csp/io/svg_plot.hpp"
 #include "csp/rt/controllers.hpp"
 #include "csp/rt/csv_log.hpp"
 #include "csp/rt/medical_metrics.hpp"
@@ -23,6 +25,7 @@ struct EmulateArguments {
   std::string log;
   std::string lcm_log;
   std::string report;   // medical scenarios: the figures' directory
+  bool progress = false;
 };
 
 // Tracking error of q against the scenario's reference trajectory, and the largest estimated
@@ -106,8 +109,10 @@ int run_emulate(const EmulateArguments& args) {
   std::signal(SIGTERM, [](int) { interrupted = true; });
   options.stop = &interrupted;
   std::string write_error;
+  ProgressMeter progress("csp emulate", args.progress);
   options.observer = [&](const rt::RobotState& state, const rt::CycleInfo& cycle) {
     const double motion_time = static_cast<double>(state.time.toMSec() - start_ms) * 1e-3;
+    if (state.time.toMSec() % 100 == 0) progress.update("simulated seconds", motion_time, scenario.duration);
     if (medical) medical->add(state, motion_time);
     else summary.add(state, motion_time);
     if (!write_error.empty()) return;
@@ -134,6 +139,8 @@ int run_emulate(const EmulateArguments& args) {
   }
 
   const rt::EmulatorCounters& counters = emulator.counters();
+  progress.finish(format("%llu cycles (%.3f s of motion)", static_cast<unsigned long long>(counters.motion_cycles),
+                         static_cast<double>(counters.motion_cycles) * 1e-3));
   std::printf("  ran %llu cycles (%.3f s), lost commands %llu (longest run %d)\n",
               static_cast<unsigned long long>(counters.motion_cycles), static_cast<double>(counters.motion_cycles) * 1e-3,
               static_cast<unsigned long long>(counters.lost_commands), counters.max_consecutive_lost);
@@ -186,6 +193,7 @@ Command add_emulate_command(CLI::App& app) {
   cmd->add_option("--log", args->log, "Write the per-cycle CSV log to this file");
   cmd->add_option("--lcm-log", args->lcm_log, "Record the run as an LCM log (csp replay, csp log export, lcm-spy)");
   cmd->add_option("--report", args->report, "Medical scenarios: write force, path and penetration figures (SVG) into this directory");
+  add_progress_flag(*cmd, args->progress);
   return [args] { return run_emulate(*args); };
 }
 

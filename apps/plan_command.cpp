@@ -13,6 +13,7 @@
 
 #include "cli_options.hpp"
 #include "commands.hpp"
+#include "progress.hpp"
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/io/svg_plot.hpp"
 #include "csp/io/yaml_field.hpp"
@@ -71,12 +72,34 @@ Model scene_model(const std::string& robot, const Scene& scene) {
   return Model(parameters);
 }
 
+// The verdict on stderr, one line (the JSON report stays on stdout): PASSED, or FAILED with the
+// first failures, so that a check's outcome reads without the report.
+std::string verdict(const PlanReport& report) {
+  if (report.passed())
+    return format("PASSED (%zu samples, %.3f s%s)", report.check.samples, report.check.duration,
+                  report.verify ? ", verified on the emulator" : "");
+  std::vector<std::string> reasons = report.problems;
+  for (const planners::CheckFailure& f : report.check.failures)
+    reasons.push_back(f.kind + (f.joint > 0 ? " joint " + std::to_string(f.joint) : "") +
+                      format(" at t = %.3f s (%g, limit %g)", f.t, f.value, f.limit) +
+                      (f.detail.empty() ? "" : " " + f.detail));
+  if (report.verify && !report.verify->passed())
+    reasons.push_back("emulated: " + (report.verify->reflex.empty() ? std::string("contact with the scene")
+                                                                    : "reflex " + report.verify->reflex.front()));
+  std::string text = "FAILED: ";
+  const std::size_t shown = std::min<std::size_t>(reasons.size(), 3);
+  for (std::size_t k = 0; k < shown; ++k) text += (k ? "; " : "") + reasons[k];
+  if (reasons.size() > shown) text += format("; and %zu more (see the report)", reasons.size() - shown);
+  return text;
+}
+
 // --- check -----------------------------------------------------------------------------------------
 
 struct CheckArguments {
   std::string trajectory, scene, robot = "panda", out;
   double power_limit = planners::CheckOptions{}.power_limit;
   double tool_speed = 0.0;
+  bool progress = false;
 };
 
 int run_check(const CheckArguments& args) {
@@ -86,6 +109,8 @@ int run_check(const CheckArguments& args) {
   if (!(args.power_limit > 0.0)) throw UsageError("--power-limit: expected a positive power [W]");
   if (args.tool_speed < 0.0) throw UsageError("--tool-speed: expected a speed >= 0 [m/s] (0: the robot file's)");
   const JointLog log = read_joint_log_csv(args.trajectory);
+  ProgressMeter progress("csp plan check", args.progress);
+  progress.update("checking the trajectory", 0, 0);
   planners::CheckOptions options;
   options.power_limit = args.power_limit;
   options.tool_speed_limit = args.tool_speed;
@@ -97,6 +122,7 @@ int run_check(const CheckArguments& args) {
   report.check = planners::check_trajectory(log, model, scene, options);
   if (!args.out.empty()) planners::write_report(args.out, report, scene);
   std::cout << planners::to_json(report).dump(2) << '\n';
+  progress.finish(verdict(report));
   return report.passed() ? 0 : 1;
 }
 
@@ -107,6 +133,7 @@ struct PlanArguments {
   std::string scene, robot = "panda", out;
   long long seed = 1;
   bool verify = false;
+  bool progress = false;
 };
 
 // What an engine made: the 1 kHz trajectory, its own record, and the scene its trajectory is checked
@@ -126,6 +153,7 @@ struct PlanContext {
   Model model;
   std::string out;
   bool verify = false;
+  std::shared_ptr<ProgressMeter> progress;   // shared: the context is passed by value
 };
 
 PlanContext load_context(const std::string& command, const PlanArguments& args, const CLI::App& subcommand) {
@@ -136,14 +164,15 @@ PlanContext load_context(const std::string& command, const PlanArguments& args, 
   for (const CLI::Option* option : subcommand.get_options()) {
     const std::string name = option->get_lnames().empty() ? "" : option->get_lnames().front();
     if (option->count() == 0 || name.empty() || name == "help" || name == "scene" || name == "robot" ||
-        name == "seed" || name == "out")
+        name == "seed" || name == "out" || name == "progress")   // progress: how it is shown, not what is made
       continue;
     request.options.emplace_back(name, option->get_expected_min() == 0 ? "" : option->as<std::string>());
   }
   Scene scene = load_scene(scene_file(args.scene));
   const std::string robot = robot_file(args.robot);
   Model model = scene_model(robot, scene);
-  return {request, std::move(scene), robot, std::move(model), args.out, args.verify};
+  return {request, std::move(scene), robot, std::move(model), args.out, args.verify,
+          std::make_shared<ProgressMeter>("csp plan " + command, args.progress)};
 }
 
 // --verify: the written scenario on the emulator (lockstep, as `csp emulate` runs it), the measured
@@ -164,6 +193,7 @@ planners::EmulatorRun verify_plan(const PlanContext& c, const Scene& scene, cons
   options.max_duration = scenario.duration;
   options.observer = [&](const rt::RobotState& state, const rt::CycleInfo&) {
     const double t = state.time.toSec();
+    if (state.time.toMSec() % 100 == 0) c.progress->update("verifying on the emulator (simulated seconds)", t, scenario.duration);
     const std::size_t row = std::min(trajectory.size() - 1, static_cast<std::size_t>(std::lround(t * 1000.0)));
     const Vector7 q(state.q.data());
     const Vector7 error = (q - trajectory.q[row]).cwiseAbs();
@@ -204,10 +234,12 @@ int finish_plan(const PlanContext& c, Planned planned) {
   report.singular_values = planned.singular_values;
   planners::write_plan_files(c.out, c.request, planners::versions(planners::ompl_version()), c.robot_file,
                              robot_armature(c.robot_file), c.scene, planned.trajectory, planned.made);
+  c.progress->update("checking the trajectory", 0, 0);
   report.check = planners::check_trajectory(planned.trajectory, c.model, check_scene);
   if (c.verify) report.verify = verify_plan(c, check_scene, planned.trajectory);
   planners::write_report(c.out, report, c.scene);
   std::cout << planners::to_json(report).dump(2) << '\n';
+  c.progress->finish(verdict(report) + ", files in " + c.out);
   return report.passed() ? 0 : 1;
 }
 
@@ -224,8 +256,7 @@ int no_plan(const PlanContext& c, const std::string& problem, const nlohmann::js
   fs::create_directories(c.out);
   write_text_file((fs::path(c.out) / "report.json").string(), json.dump(2) + "\n");
   std::cout << json.dump(2) << '\n';
-  std::cerr << "csp plan " << c.request.command << ": no plan: " << problem << " (best attempt in "
-            << (fs::path(c.out) / "report.json").string() << ")\n";
+  c.progress->finish("FAILED: no plan: " + problem + " (best attempt in " + (fs::path(c.out) / "report.json").string() + ")");
   return 1;
 }
 
@@ -256,6 +287,7 @@ struct TimedPath {
 std::optional<TimedPath> transfer(const PlanContext& c, planners::ClearanceChecker& checker, const NamedPose& from,
                                   const NamedPose& to, const planners::TransferOptions& options,
                                   std::string& problem, nlohmann::json& best) {
+  c.progress->update("planning transfer " + from.name + " -> " + to.name, 0, 0);
   const planners::TransferPlan plan =
       planners::plan_transfer(c.scene, checker, c.model.parameters().joint_limits, from, to, options);
   if (!plan.found) {
@@ -317,6 +349,7 @@ int run_task(const TaskArguments& args, const CLI::App& command) {
   options.seed = static_cast<unsigned>(c.request.seed);
   options.max_iterations = args.max_iterations;
   planners::TaskPath path;
+  c.progress->update("planning the task path", 0, 0);
   try {
     path = planners::plan_task_path(c.scene, c.model, options);
   } catch (const planners::TaskError& e) {
@@ -366,6 +399,7 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
   planners::TaskPathOptions task_options;
   task_options.seed = static_cast<unsigned>(c.request.seed);
   planners::TaskPath task;
+  c.progress->update("planning the task path", 0, 0);
   try {
     task = planners::plan_task_path(c.scene, c.model, task_options);
   } catch (const planners::TaskError& e) {
@@ -407,6 +441,7 @@ int run_excite(const ExciteArguments& args, const CLI::App& command) {
   options.seed = static_cast<unsigned>(c.request.seed);
   options.max_evaluations = args.max_evaluations;
   options.clearance = [&checker](const Vector7& q) { return checker.check(q).clearance; };
+  options.progress = c.progress->callback();
   const planners::MultiAnchorExcitation excitation = planners::solve_anchors(c.model, options, anchors);
 
   planners::TransferOptions transfer_options;
@@ -483,6 +518,7 @@ void add_plan_options(CLI::App& command, PlanArguments& args) {
       ->capture_default_str();
   command.add_option("--out", args.out, "Directory of the plan's files")->required();
   command.add_flag("--verify", args.verify, "Run the written scenario on the emulator and report it");
+  add_progress_flag(command, args.progress);
 }
 
 }  // namespace
@@ -507,6 +543,7 @@ Command add_plan_command(CLI::App& app) {
   check_command->add_option("--tool-speed", check->tool_speed,
                             "TCP speed limit [m/s] (default: the robot file's Cartesian translation limit)");
   check_command->add_option("--out", check->out, "Also write report.json, report.md and the figures here");
+  add_progress_flag(*check_command, check->progress);
 
   auto transfer = std::make_shared<TransferArguments>();
   CLI::App* transfer_command =
@@ -554,6 +591,8 @@ Command add_plan_command(CLI::App& app) {
       "rebuild", "Make a plan again from its plan.yaml: the same files, byte for byte");
   rebuild_command->add_option("plan", rebuild->first, "A plan's plan.yaml")->required();
   rebuild_command->add_option("--out", rebuild->second, "Directory of the files (default: the plan.yaml's)");
+  auto rebuild_progress = std::make_shared<bool>(false);
+  add_progress_flag(*rebuild_command, *rebuild_progress);
 
   return [=]() -> int {
     if (check_command->parsed()) return run_check(*check);
@@ -570,6 +609,7 @@ Command add_plan_command(CLI::App& app) {
       args.push_back("--" + name);
       if (!value.empty()) args.push_back(value);
     }
+    if (*rebuild_progress) args.push_back("--progress");
     CLI::App again;
     const Command run = add_plan_command(again);
     std::reverse(args.begin(), args.end());   // CLI11 takes the arguments last first

@@ -12,6 +12,7 @@
 
 #include "cli_options.hpp"
 #include "commands.hpp"
+#include "progress.hpp"
 #include "csp/dynamics/workspace.hpp"
 #include "csp/io/svg_plot.hpp"
 #include "csp/io/workspace_figures.hpp"
@@ -87,6 +88,8 @@ int run_workspace(const WorkspaceArguments& args) {
   options.seed = static_cast<std::uint64_t>(args.seed);
   options.grid = args.grid;
   options.frame = Frame::kEndEffector;   // = the flange when --ee none
+  ProgressMeter progress("csp workspace", args.progress);
+  options.progress = progress.callback();
   WorkspaceCallback on_point;
   if (points.is_open())
     on_point = [&points](const WorkspacePoint& p) { write_point_row(points, p.flange, p.end_effector); };
@@ -105,6 +108,7 @@ int run_workspace(const WorkspaceArguments& args) {
   const WorkspaceFigures figures = workspace_figures(result, options, robot, flange_only ? "" : args.model.end_effector);
   write_text_file(side_path, render_heat_map(figures.side));
   write_text_file(top_path, render_heat_map(figures.top));
+  progress.finish(format("%lld samples, figures in %s", args.samples, args.out.c_str()));
 
   std::cout << format("csp workspace: %s, end effector %s, %lld samples, seed %lld\n", robot.c_str(),
                       args.model.end_effector.c_str(), args.samples, args.seed)
@@ -142,6 +146,7 @@ Command add_workspace_command(CLI::App& app) {
                       "(large: about 60 bytes per sample)");
   command->add_option("--grid", args->grid, "Histogram cells per axis (10.." + std::to_string(kMaxGrid) + ")")
       ->capture_default_str();
+  add_progress_flag(*command, args->progress);
 
   return [args] { return run_workspace(*args); };
 }

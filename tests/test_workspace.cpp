@@ -237,6 +237,41 @@ TEST(WorkspaceCli, WritesSideAndTopFigures) {
   std::filesystem::remove_all(scratch_dir());
 }
 
+// Progress (apps/progress.hpp): stderr is a file here, not a terminal, so the command is quiet but
+// for one summary line, unless --progress asks; then lines with the stage, a growing percentage,
+// the rate and the time left. stdout, the result, is the same either way.
+TEST(WorkspaceCli, ProgressOnStderrWhenAskedAndOneSummaryLineAlways) {
+  const auto dir = scratch("progress");
+  const std::string arguments = "workspace --samples 300000 --grid 40 --out '" + dir.string() + "'";
+  const CliRun quiet = run_csp(arguments);
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.err;
+  EXPECT_EQ(std::count(quiet.err.begin(), quiet.err.end(), '\n'), 1) << quiet.err;
+  EXPECT_EQ(quiet.err.rfind("csp workspace: 300000 samples, figures in " + dir.string() + " (", 0), 0u) << quiet.err;
+
+  const CliRun shown = run_csp(arguments + " --progress");
+  ASSERT_EQ(shown.exit_code, 0) << shown.err;
+  std::vector<std::string> lines;
+  std::istringstream err(shown.err);
+  for (std::string line; std::getline(err, line);) lines.push_back(line);
+  ASSERT_GE(lines.size(), 4u) << shown.err;   // 0 %, at least two steps of a tenth, the summary
+  EXPECT_EQ(lines.back().rfind("csp workspace: 300000 samples", 0), 0u) << shown.err;
+  double last_percent = -1.0;
+  for (std::size_t k = 0; k + 1 < lines.size(); ++k) {
+    ASSERT_EQ(lines[k].rfind("csp workspace: sampling ", 0), 0u) << lines[k];
+    const double percent = std::stod(lines[k].substr(std::string("csp workspace: sampling ").size()));
+    EXPECT_GT(percent, last_percent) << shown.err;
+    last_percent = percent;
+    if (k > 0) {   // a rate and the time left once something is done
+      EXPECT_NE(lines[k].find("/s, "), std::string::npos) << lines[k];   // e.g. "2.3 M/s, <1 s left"
+      EXPECT_NE(lines[k].find(" left)"), std::string::npos) << lines[k];
+    }
+  }
+  // The same result on stdout, but for the line that times the run.
+  auto without_time = [](const std::string& out) { return out.substr(0, out.find("\ntime: ")); };
+  EXPECT_EQ(without_time(shown.out), without_time(quiet.out));
+  std::filesystem::remove_all(scratch_dir());
+}
+
 TEST(WorkspaceCli, BadArgumentsExitWithTwoAndOneLine) {
   const auto not_a_dir = scratch("plain_file");
   std::ofstream(not_a_dir) << "x";

@@ -97,6 +97,7 @@ WorkspaceResult sample_workspace(const Model& model, const WorkspaceOptions& opt
 
   std::mt19937_64 engine(options.seed);
   for (std::int64_t n = 0; n < options.samples; ++n) {
+    if (n % 65536 == 0) report(options.progress, "sampling", static_cast<double>(n), static_cast<double>(options.samples));
     const Vector7 q = uniform_joint_sample(limits, engine);
     forward_kinematics(model, data, q);
     const Vector3& shoulder = data.O_T_joint[1].translation;

@@ -530,6 +530,7 @@ ExcitationResult ExcitationProblem::solve() const {
       [](const std::vector<double>& x, std::vector<double>& grad, void* data) {
         auto* c = static_cast<Context*>(data);
         ++c->evaluations;
+        report(c->problem->options_.progress, "optimising", c->evaluations, c->problem->options_.max_evaluations);
         c->last_x = x;
         c->last_value = c->problem->criterion(x, grad.empty() ? nullptr : &grad);
         return c->last_value;
@@ -604,6 +605,11 @@ MultiAnchorExcitation solve_anchors(const Model& model, const ExcitationOptions&
   for (std::size_t a = 0; a < anchors.size(); ++a) {
     o.anchor = anchors[a];
     o.seed = options.seed + static_cast<unsigned>(a);
+    const std::string anchor_stage = "anchor " + std::to_string(a + 1) + " of " + std::to_string(anchors.size()) + ": ";
+    if (options.progress)
+      o.progress = [&](std::string_view stage, double done, double total) {
+        options.progress(anchor_stage + std::string(stage), done, total);
+      };
     const ExcitationProblem problem(model, o);
     out.segments.push_back(problem.solve());
     const ExcitationResult& r = out.segments.back();

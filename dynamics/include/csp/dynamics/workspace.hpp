@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "csp/dynamics/model.hpp"
+#include "csp/dynamics/progress.hpp"
 
 namespace csp {
 
@@ -36,6 +37,7 @@ struct WorkspaceOptions {
   std::uint64_t seed = 1;
   Frame frame = Frame::kEndEffector;   // whose positions fill the histograms: kFlange or kEndEffector
   int grid = 200;                      // cells per axis of each histogram (square cells)
+  Progress progress;                   // "sampling", every 65 536 samples
 };
 
 // Extremes of one frame's sampled positions (base frame, metres).

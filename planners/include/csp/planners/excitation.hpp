@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "csp/dynamics/progress.hpp"
 #include "csp/planners/fourier.hpp"
 #include "csp/planners/identifiability.hpp"
 
@@ -65,6 +66,7 @@ struct ExcitationOptions {
   int random_starts = 20;
   int max_evaluations = 300;          // NLopt budget (criterion + constraints with gradients)
   double sharpness = 100.0;           // rho of the smooth minimum over normalised margins
+  Progress progress;                  // "optimising", evaluations of max_evaluations
 };
 
 // The criteria of a trajectory: stacked regressor of its states at design_rate_hz over [0, duration).
