@@ -26,7 +26,7 @@ std::vector<std::string> every_truth() {
   return truths;
 }
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(CSP_SANITIZE_BUILD)
 // The sanitizer build runs 10-20x slower: one seed per effect and the first three pairs there, and
 // of the emulated robot's logs three truths (one through the plant's extra torque) and one pair.
 constexpr unsigned kSeeds = 1;

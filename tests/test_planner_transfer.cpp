@@ -35,7 +35,7 @@ using planners::TransferOptions;
 using planners::TransferPlan;
 namespace ompl_bridge = planners::ompl_bridge;
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(CSP_SANITIZE_BUILD)
 // The sanitizer build runs 10-20x slower: it keeps the OMPL set-up and solve paths (ompl/ompl#601)
 // with fewer scenes.
 constexpr int kRandomScenes = 4;

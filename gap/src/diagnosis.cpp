@@ -379,12 +379,16 @@ std::pair<EffectSet, SetFit> forward_selection(const std::vector<std::unique_ptr
   SetFit current{VectorXd(0), VectorXd(0), train.residual, heldout.residual};
   while (selected.size() < library.size()) {
     thresholds.clear();
+    const std::string stage = "selecting cause " + std::to_string(selected.size() + 1);
+    double tried = 0;
+    const double candidates = static_cast<double>(library.size() - selected.size());
     const Effect* best = nullptr;
     EffectResult best_result;
     SetFit best_fit;
     std::vector<std::tuple<const Effect*, EffectResult, SetFit>> passing;
     for (const auto& effect : library) {
       if (std::find(selected.begin(), selected.end(), effect.get()) != selected.end()) continue;
+      report(options.progress, stage, tried++, candidates);
       EffectSet set = selected;
       set.push_back(effect.get());
       VectorXd start(set_size(set));
@@ -465,6 +469,7 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   const std::vector<std::unique_ptr<Effect>> library = effect_library(model);
   const InertialRegressor regressor(model);
   Diagnosis d;
+  report(options.progress, "filtering and predicting", 0, 0);
   d.train = evaluate_part(model, regressor, filter_log(train_log, options.filter));
   d.heldout = evaluate_part(model, regressor, filter_log(heldout_log, options.filter));
   const Part& train = d.train;
@@ -484,6 +489,8 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
 
   // Each effect alone, against the baseline.
   for (const auto& effect : library) {
+    report(options.progress, "fitting each effect alone", static_cast<double>(d.effects.size()),
+           static_cast<double>(library.size()));
     const EffectSet set = {effect.get()};
     const SetFit fit = fit_set(set, train, heldout, effect->initial_guess(train, train.residual));
     d.effects.push_back(make_result(effect->name(), set, fit, heldout.residual,
@@ -509,6 +516,7 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
     d.causes.clear(), d.steps.clear();
     std::tie(selected, current) = forward_selection(library, steady_train, steady_heldout, *random_steady, options, d);
   }
+  report(options.progress, "checking each cause against the others", 0, 0);
   const Part& selection_train = d.transients.empty() ? train : steady_train;
   const Part& selection_heldout = d.transients.empty() ? heldout : steady_heldout;
   backward_check(selected, current, selection_train, selection_heldout, random_steady ? *random_steady : random,
@@ -522,6 +530,7 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   d.verdict_params = selected.empty() ? nlohmann::json::object() : describe_set(selected, current);
   d.verdict_heldout_torque = heldout.residual - current.heldout_left;
   // What is left, localised on the held-out part's steady samples, and the transients of both parts.
+  report(options.progress, "localising what is left", 0, 0);
   if (d.transients.empty()) {
     d.unexplained = localise_unexplained(heldout, current.heldout_left, d.causes);
   } else {

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "csp/dynamics/progress.hpp"
 #include "csp/gap/effects.hpp"
 #include "csp/io/joint_log.hpp"
 
@@ -22,6 +23,7 @@ struct DiagnosisOptions {
   double min_explained = 0.02;    // and an effect must remove at least this fraction of the held-out mean square
   double parsimony_margin = 0.1;  // a smaller effect within this fraction of the best improvement is preferred
   unsigned seed = 1;              // of the random regressors
+  Progress progress;              // its stages: each effect alone, each selection step, the checks
 };
 
 // One effect (or set) fitted on the training part and evaluated on the held-out part.
