@@ -14,9 +14,9 @@ lcm.LCM that the types lcm-gen writes and CSP's Python tools use, with the same 
 Prefer LCM's own module where it is installed (`import lcm`); this one is the stand-in with the
 same API. Not provided: LCM's other transports (file://, memq://, tcpq://), EventLog, and
 LCMSubscription.set_queue_capacity. Received datagrams wait in the kernel's socket buffer until
-handle() reads them (LCM's library reads them in a thread): a message of more than about 100 kB
-arrives only if the buffer holds all its fragments, so add recv_buf_size=BYTES to the URL for such
-messages (the kernel caps it at net.core.rmem_max).
+handle() reads them (LCM's library reads them in a thread of its own), and what does not fit is lost:
+for messages of more than about 100 kB add recv_buf_size=BYTES to the URL (the kernel caps it at
+net.core.rmem_max).
 """
 import os
 import re
