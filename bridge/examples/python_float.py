@@ -5,10 +5,11 @@ The robot adds gravity compensation itself; this controller only damps the joint
 tau = -D dq, in torque mode, for --duration seconds of robot time. It does what
 csp_lcm_float does, with the Python types lcm-gen writes at build time.
 
-Needs the LCM Python module (Debian: python3-lcm; or LCM built from source):
+Needs python3 only: it uses LCM's own Python module where one is installed, else CSP's
+pure-Python client bridge/python/csp_lcm.py (Debian 12 packages no LCM Python module):
 
     build/apps/csp serve --clock lockstep --wait &
-    PYTHONPATH=build/bridge/python python3 bridge/examples/python_float.py --duration 5
+    PYTHONPATH=build/bridge/python:bridge/python python3 bridge/examples/python_float.py --duration 5
 
 Use the lockstep clock: each cycle waits for its command, so Python's speed does not
 matter; on the real-time clock a command counts only if it arrives within the 1 ms cycle.
@@ -17,9 +18,18 @@ import argparse
 import sys
 import time
 
-import lcm
-
-from csp import config_reply_t, config_request_t, robot_state_t, torque_command_t
+try:
+    import lcm   # LCM's own module, where installed
+except ImportError:
+    try:
+        import csp_lcm as lcm   # CSP's stand-in with the same API (bridge/python)
+    except ImportError:
+        sys.exit("python_float: no LCM client: add bridge/python to PYTHONPATH (CSP's csp_lcm) or install LCM's Python module")
+try:
+    from csp import config_reply_t, config_request_t, robot_state_t, torque_command_t
+except ImportError:
+    sys.exit("python_float: no CSP message types: build them (cmake --build build --target csp_lcm_types) "
+             "and add build/bridge/python to PYTHONPATH")
 
 
 def utime():
@@ -91,7 +101,10 @@ def main():
     parser.add_argument("--timeout", type=float, default=2.0, help="wait for a state or a reply [s]")
     args = parser.parse_args()
 
-    robot = Robot(args.lcm_url, args.prefix, args.timeout)
+    try:
+        robot = Robot(args.lcm_url, args.prefix, args.timeout)
+    except (OSError, RuntimeError, ValueError) as error:   # csp_lcm's OSError / ValueError, lcm's RuntimeError
+        sys.exit(f"python_float: cannot open LCM at {args.lcm_url}: {error}")
     robot.state_after(-1)
     robot.start_torque_session()
     state = robot.state   # the first command answers the newest state
@@ -105,9 +118,12 @@ def main():
         if finished or state.robot_mode != robot_state_t.MODE_MOVE:
             break
     mode = {robot_state_t.MODE_IDLE: "Idle", robot_state_t.MODE_REFLEX: "Reflex"}.get(state.robot_mode, str(state.robot_mode))
-    print(f"python_float: {commands} commands, ended at t = {state.time * 1e-3:.3f} s in {mode}")
+    print(f"python_float: {commands} commands, ended at t = {state.time * 1e-3:.3f} s in {mode} (LCM client: {lcm.__name__})")
     return 1 if state.robot_mode == robot_state_t.MODE_REFLEX else 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:
+        sys.exit("python_float: interrupted")
