@@ -4,7 +4,9 @@
 // physics (gravity). Frames are written byte by byte from the CiA 301/402 text.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -43,6 +45,7 @@ class RecordingArm : public Arm {
     q.push_back(arm.server().emulator().state().q);
     return state;
   }
+  ArmState measured() const override { return arm.measured(); }
   ServerArm arm;
   std::vector<std::array<double, 7>> q;
 };
@@ -228,6 +231,138 @@ TEST_F(CanServe, CspFollowsTheTargetPositionLikeTheInProcessJointPositionMode) {
   sync();
   EXPECT_FALSE(emulator().in_motion());
   EXPECT_FALSE(bool(emulator().state().current_errors)) << emulator().reflex_reason();
+}
+
+// Frames as candump writes them (ID#DATA), to compare with frames written from the spec.
+std::vector<std::string> frames_sent(const DriveBus& bus) {
+  std::vector<std::string> frames;
+  for (const Frame& f : bus.sent()) frames.push_back(to_string(f));
+  return frames;
+}
+
+bool contains(const std::vector<std::string>& frames, const std::string& frame) {
+  return std::find(frames.begin(), frames.end(), frame) != frames.end();
+}
+
+// Little-endian hex of a 32-bit value, as it stands in a frame.
+std::string le32(int64_t value) {
+  char hex[9];
+  const auto v = static_cast<uint32_t>(value);
+  std::snprintf(hex, sizeof hex, "%02X%02X%02X%02X", v & 0xFF, (v >> 8) & 0xFF, (v >> 16) & 0xFF, v >> 24);
+  return hex;
+}
+
+TEST_F(CanServe, BeforeTheFirstSyncTheDrivesReportTheRobotsTruePosition) {
+  const rt::Scenario scenario = rt::load_scenario(rt::default_scenario_path());
+  // Libfranka's "ready" pose: joint 2 at -0.785398 rad = -785398 urad = 0xFFF4040A, joint 4 at
+  // -2356194 urad = 0xFFDC0C1E. SDO upload (CiA 301): request 40 6064:00, answer 43 (4 bytes).
+  ASSERT_EQ(scenario.emulator.q_initial[1], -0.785398);
+  bus.clear_sent();
+  bus.receive(parse_frame("602#4064600000000000"));
+  EXPECT_EQ(frames_sent(bus), std::vector<std::string>{"582#436460000A04F4FF"});
+  bus.clear_sent();
+  bus.receive(parse_frame("604#4064600000000000"));
+  EXPECT_EQ(frames_sent(bus), std::vector<std::string>{"584#436460001E0CDCFF"});
+  // Every joint: position 0x6064 and position demand 0x6062 = the start pose, torque 0x6077 = the
+  // robot's tau_J (gravity: joint 2 carries the arm), all before any SYNC and before NMT start.
+  const rt::RobotState& s = emulator().state();
+  for (int n = 1; n <= 7; ++n) {
+    const std::string q = le32(std::lround(scenario.emulator.q_initial[n - 1] * 1e6));
+    for (const char* index : {"6460", "6260"}) {
+      bus.clear_sent();
+      bus.receive(parse_frame(std::string("60") + char('0' + n) + "#40" + index + "0000000000"));
+      EXPECT_EQ(frames_sent(bus), std::vector<std::string>{std::string("58") + char('0' + n) + "#43" + index + "00" + q}) << "joint " << n;
+    }
+    EXPECT_EQ(bus.node(n - 1).value(0x6077, 0), std::lround(s.tau_J[n - 1] / torque_step(n - 1))) << "joint " << n;
+  }
+  EXPECT_GT(std::abs(bus.node(1).value(0x6077, 0)), 1000);   // joint 2 holds the arm: > 3 N m
+  EXPECT_TRUE(arm.q.empty());                                 // no cycle has run
+
+  // The first TPDO1 after NMT start: statusword 0x0240 (switch on disabled, remote), the
+  // position, the torque; TPDO2 velocity 0 (the arm rests), tau_ext, mode display 10.
+  bus.receive(frame(kNmt, {0x01, 0x00}));
+  const rt::RobotState before_sync = emulator().state();
+  bus.clear_sent();
+  sync();
+  const std::vector<std::string> first = frames_sent(bus);
+  for (int n = 1; n <= 7; ++n) {
+    char tau[5];
+    const auto raw = static_cast<uint16_t>(std::lround(before_sync.tau_J[n - 1] / torque_step(n - 1)));
+    std::snprintf(tau, sizeof tau, "%02X%02X", raw & 0xFF, raw >> 8);
+    EXPECT_TRUE(contains(first, std::string("18") + char('0' + n) + "#4002" + le32(std::lround(scenario.emulator.q_initial[n - 1] * 1e6)) + tau))
+        << "joint " << n;
+  }
+  // Joint 2's position bytes as the spec lays them out: statusword 4002, then 0A04F4FF.
+  EXPECT_EQ(std::count_if(first.begin(), first.end(), [](const std::string& f) { return f.rfind("182#40020A04F4FF", 0) == 0; }), 1);
+  // A reset node restores the objects' defaults, but the position stays the robot's, not 0.
+  bus.receive(frame(kNmt, {0x81, 0x02}));
+  bus.clear_sent();
+  bus.receive(parse_frame("602#4064600000000000"));
+  EXPECT_EQ(frames_sent(bus), std::vector<std::string>{"582#436460000A04F4FF"});
+}
+
+// The session log's event records (CSP_EVENT) with their text.
+std::vector<std::string> logged_events(const std::string& path) {
+  bridge::LogReader reader(path);
+  std::vector<std::string> texts;
+  for (const bridge::LogEvent* e = reader.next(); e; e = reader.next()) {
+    event_t event;
+    if (e->channel == bridge::Channels{}.event && bridge::decode_exact(e->data, e->datalen, event) == bridge::Rejection::kNone)
+      texts.push_back(event.text);
+  }
+  return texts;
+}
+
+TEST_F(CanServe, MixedModesRunNoMotionSendEmcy6320FromEachEnabledDriveAndLogAnError) {
+  bus.receive(frame(kNmt, {0x01, 0x00}));
+  bus.receive(frame(kRpdo4 + 7, {kModeCsp}));   // joint 7 in CSP, joints 1-6 in CST (the default)
+  for (uint16_t cw : {0x06, 0x07}) controlword_all(cw);
+  bus.clear_sent();
+  controlword_all(0x0F);   // the SYNC that latches "enable operation"
+  EXPECT_FALSE(emulator().in_motion());
+  EXPECT_EQ(arm.arm.counters().motions, 0u);
+  EXPECT_EQ(arm.arm.counters().mixed_modes, 1u);
+  // EMCY (CiA 301): code 0x6320 little-endian, error register 0 (no fault), CSP's bytes:
+  // libfranka error 0xFF (none), the joint, three zeros. One per enabled drive.
+  const std::vector<std::string> frames = frames_sent(bus);
+  for (int n = 1; n <= 7; ++n)
+    EXPECT_TRUE(contains(frames, std::string("08") + char('0' + n) + "#206300FF0" + char('0' + n) + "000000")) << "joint " << n;
+  EXPECT_EQ(emcy_count(0x6320), 7);
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(statusword(j) & 0x6F, 0x27) << "joint " << j + 1;   // still enabled, no fault
+  // Once per mix: the next cycles send no more.
+  bus.clear_sent();
+  controlword_all(0x0F);
+  EXPECT_EQ(emcy_count(0x6320), 0);
+
+  // The master puts joint 7 in CST too, then disables and enables: one torque motion.
+  bus.receive(frame(kRpdo4 + 7, {kModeCst}));
+  controlword_all(0x07);
+  controlword_all(0x0F);
+  ASSERT_TRUE(emulator().in_motion());
+  EXPECT_EQ(*arm.arm.server().session(), rt::ControlMode::kTorque);
+  // Joint 3 switches to CSP during the motion: the motion finishes without a reflex, and the
+  // seven enabled drives send EMCY 0x6320 again.
+  bus.clear_sent();
+  bus.receive(frame(kRpdo4 + 3, {kModeCsp}));
+  controlword_all(0x0F);
+  EXPECT_EQ(emcy_count(0x6320), 7);
+  sync();
+  EXPECT_FALSE(emulator().in_motion());
+  EXPECT_FALSE(bool(emulator().state().current_errors)) << emulator().reflex_reason();
+  EXPECT_EQ(arm.arm.counters().mixed_modes, 2u);
+
+  // The session log has an error record for each mix, naming the joints' modes.
+  arm.arm.log()->flush();
+  std::vector<std::string> errors;
+  for (const std::string& text : logged_events(log))
+    if (text.rfind("error: ", 0) == 0) errors.push_back(text);
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_NE(errors[0].find("different modes of operation (joint 1 CST, 2 CST, 3 CST, 4 CST, 5 CST, 6 CST, 7 CSP)"), std::string::npos)
+      << errors[0];
+  EXPECT_NE(errors[1].find("(joint 1 CST, 2 CST, 3 CSP, 4 CST, 5 CST, 6 CST, 7 CST)"), std::string::npos) << errors[1];
+  // And the log still replays bit for bit (replay skips events).
+  const bridge::ResimulationReport replay = bridge::resimulate(log);
+  EXPECT_TRUE(replay.identical()) << replay.first_difference;
 }
 
 // The master's torque that holds the arm against gravity (the robot's own model, quantized).

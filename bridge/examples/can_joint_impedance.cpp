@@ -7,6 +7,8 @@
 // Works unchanged on vcan0 (csp can serve) or a physical interface (can0).
 //   build/apps/csp can serve --iface vcan0 &
 //   build/bridge/can/csp_can_joint_impedance --iface vcan0 --cycles 5000
+// Without kernel CAN, in user-mode-linux (docs/can.md, "Your own master without kernel CAN"):
+//   bridge/can/tools/csp-can-sandbox --csp build/apps/csp -- build/bridge/can/csp_can_joint_impedance
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -19,7 +21,9 @@ int main(int argc, char** argv) {
   CLI::App app("Joint impedance control of seven CiA 402 drives over CAN (CST mode)", "csp_can_joint_impedance");
   std::string iface = "vcan0";
   int cycles = 5000;
-  double amplitude = 0.1, period = 4.0, timeout = 1.0;
+  // 10 s: only how long a dead server takes to show; a user-mode-linux guest on a busy machine
+  // stalls for far longer than a real bus ever makes a master wait (docs/can.md).
+  double amplitude = 0.1, period = 4.0, timeout = 10.0;
   app.add_option("--iface", iface, "CAN interface")->capture_default_str();
   app.add_option("--cycles", cycles, "Control cycles (one SYNC each)")->check(CLI::Range(1, 100'000'000))->capture_default_str();
   app.add_option("--amplitude", amplitude, "Motion of joints 1 and 4 [rad]")->check(CLI::Range(0.0, 0.5))->capture_default_str();

@@ -12,6 +12,10 @@ Works unchanged on vcan0 (csp can serve) and on a physical interface (can0):
     build/apps/csp can serve --iface vcan0 &
     python3 bridge/examples/can_joint_impedance.py --iface vcan0 --cycles 5000
 
+Without kernel CAN (no vcan here), in user-mode-linux, one command:
+
+    bridge/can/tools/csp-can-sandbox --csp build/apps/csp -- /usr/bin/python3 bridge/examples/can_joint_impedance.py
+
 Needs python-can (Debian: python3-can). The sync clock waits for the SYNC, so Python's speed
 does not matter; with `--clock realtime` a cycle counts only if its RPDOs come within 1 ms.
 """
@@ -83,7 +87,9 @@ def main():
     parser.add_argument("--cycles", type=int, default=5000)
     parser.add_argument("--amplitude", type=float, default=0.1, help="motion of joints 1 and 4 [rad]")
     parser.add_argument("--period", type=float, default=4.0, help="period of the motion [s]")
-    parser.add_argument("--timeout", type=float, default=1.0, help="wait for answers [s]")
+    # 10 s: only how long a dead server takes to show; a user-mode-linux guest on a busy machine
+    # stalls for far longer than a real bus ever makes a master wait (docs/can.md).
+    parser.add_argument("--timeout", type=float, default=10.0, help="wait for answers [s]")
     args = parser.parse_args()
 
     drives = Drives(args.iface, args.timeout)

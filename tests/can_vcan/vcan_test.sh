@@ -1,9 +1,11 @@
-# The vcan test, inside user-mode-linux (run_in_uml.sh): vcan0 to vcan3 are up. Every part runs
-# even if an earlier one failed; the exit code counts the failed parts. Environment: CSP_BIN
-# (csp), CSP_REFERENCE (csp_can_reference), CSP_TESTS (this folder), CSP_VENDOR (shared/vendor),
-# CSP_WORK (scratch folder on the host's disk).
+# The vcan test, inside user-mode-linux (`csp-can-sandbox --no-serve -- sh vcan_test.sh`): vcan0
+# to vcan6 are up. Every part runs even if an earlier one failed; the exit code counts the failed
+# parts. Environment: CSP_BIN (csp), CSP_REFERENCE (csp_can_reference), CSP_SANDBOX
+# (csp-can-sandbox, run here with --here as a user runs it), CSP_CAN_EXAMPLE, CSP_EXAMPLES,
+# CSP_TESTS (this folder), CSP_VENDOR (shared/vendor), CSP_WORK (scratch folder on the host's disk).
 failed=0
-part() { echo "=== $1"; }
+start=$(date +%s)
+part() { echo "=== [$(($(date +%s) - start)) s] $1"; }
 fail() { echo "FAIL  $1"; failed=$((failed + 1)); }
 PY=/usr/bin/python3
 for tool in candump canplayer canbusload cangen; do
@@ -13,6 +15,10 @@ $PY -c "import can" || { echo "FAIL  python3-can missing: apt-get install python
 
 M="$CSP_TESTS/master.py"
 W="$CSP_WORK"
+mkdir -p "$W" || exit 1
+# A master as a user runs it: csp-can-sandbox starts `csp can serve`, runs the master, stops the
+# server and returns the master's exit code; its files go to $W/$1.
+sandbox() { name=$1; shift; "$CSP_SANDBOX" --here --csp "$CSP_BIN" --work "$W/$name" "$@"; }
 
 part "independent master (python-can): boot, SDO, 402, 1000 CST cycles vs the in-process emulator, RPDO silence, replay"
 candump -L vcan0 > "$W/session.candump" &
@@ -44,8 +50,15 @@ $PY "$M" replay-compare "$W" || fail "replay"
 part "bad input on the live bus: wrong DLC, unknown COB-IDs, SDO errors, out-of-range target, 1e5 frames"
 $PY "$M" badinput "$CSP_BIN" "$W" || fail "bad input"
 
-part "interop: the unmodified python-canopen (BaseNode402) maps PDOs by SDO, enables, moves in CSP and CST"
-$PY "$CSP_TESTS/canopen_interop.py" "$CSP_BIN" "$CSP_VENDOR" "$W" || fail "python-canopen"
+part "csp-can-sandbox: candump as the master sees the drives' heartbeats; the master's exit code comes back"
+sandbox candump -- sh -c 'candump -L -n 14 vcan0 > "$0" && exit 3' "$W/candump-master.out"
+[ $? = 3 ] || fail "sandbox: candump failed, or the master's exit code 3 did not come back"
+for n in 1 2 3 4 5 6 7; do
+  grep -q " vcan0 70$n#7F\$" "$W/candump-master.out" || fail "sandbox: candump saw no pre-operational heartbeat 70$n#7F"
+done
+
+part "interop: the unmodified python-canopen (BaseNode402), started by csp-can-sandbox, reads the start pose, maps PDOs by SDO, enables, moves in CSP and CST"
+sandbox interop -- $PY "$CSP_TESTS/canopen_interop.py" "$CSP_BIN" "$CSP_VENDOR" "$W" || fail "python-canopen"
 
 part "--split 4: the joints over vcan0..vcan3, each bus with its own nodes, its load under 100 %"
 candump -L any > "$W/split.candump" &
@@ -61,16 +74,12 @@ kill $dump
 cat "$W/split.out"
 $PY "$M" split "$W" || fail "split"
 
-part "examples: csp_can_joint_impedance (csp::can::Master) and can_joint_impedance.py (python-can)"
-for example in "$CSP_CAN_EXAMPLE --timeout 10" "$PY $CSP_EXAMPLES/can_joint_impedance.py --timeout 10"; do
-  "$CSP_BIN" can serve --iface vcan0 --duration 1000 > "$W/example.out" 2>&1 &
-  serve=$!
-  sleep 2
-  $example --iface vcan0 --cycles 300 || fail "$example"
-  kill -INT $serve; wait $serve
-  cat "$W/example.out"
-  grep -q "motions 1, motion cycles 30[0-9], lost commands 0" "$W/example.out" || fail "$example: one motion of 300 cycles, none lost"
+part "examples, with their default timeouts, started by csp-can-sandbox: csp_can_joint_impedance (csp::can::Master) and can_joint_impedance.py (python-can)"
+for example in "$CSP_CAN_EXAMPLE" "$PY $CSP_EXAMPLES/can_joint_impedance.py"; do
+  name=example-$(basename "${example##* }")
+  sandbox "$name" -- $example --iface vcan0 --cycles 300 || fail "$example"
+  grep -q "motions 1, motion cycles 30[0-9], lost commands 0" "$W/$name/serve.log" || fail "$example: one motion of 300 cycles, none lost"
 done
 
-echo "=== $failed part(s) failed"
+echo "=== [$(($(date +%s) - start)) s] $failed part(s) failed"
 exit $failed

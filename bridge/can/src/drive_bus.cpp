@@ -16,6 +16,8 @@ DriveBus::DriveBus(const BusSettings& settings, Arm& arm) : arm_(arm) {
     joint_of_node_[id] = j;
     nodes_.emplace_back(id, settings.drives[j], settings.identity, out_);
   }
+  const ArmState initial = arm.measured();
+  for (int j = 0; j < kJoints; ++j) nodes_[j].update(initial.joints[j], initial.errors, initial.mixed_modes);
 }
 
 void DriveBus::receive(const Frame& frame) {
@@ -89,7 +91,7 @@ void DriveBus::cycle_without_sync() {
 
 void DriveBus::run_arm() {
   const ArmState state = arm_.cycle(command_);
-  for (int j = 0; j < kJoints; ++j) nodes_[j].update(state.joints[j], state.errors);
+  for (int j = 0; j < kJoints; ++j) nodes_[j].update(state.joints[j], state.errors, state.mixed_modes);
 }
 
 void DriveBus::elapse(uint32_t microseconds) {

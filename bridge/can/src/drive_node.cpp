@@ -84,6 +84,7 @@ void DriveNode::reset(bool communication_only) {
     if (communication_only && e.index >= 0x2000) continue;
     values_[i] = e.default_value + (e.plus_node_id ? node_id_ : 0);
   }
+  write_measurement();
   rebuild_pdos();
   sdo_ = {};
   heartbeat_elapsed_us_ = 0;
@@ -94,6 +95,7 @@ void DriveNode::reset(bool communication_only) {
     torque_limited_ = false;
     recovery_requested_ = false;
     received_since_sync_ = false;
+    mixed_modes_reported_ = false;
     set_state(next_state(DriveState::kNotReadyToSwitchOn, 0, 0, 0));   // self-test done: switch on disabled
   }
   boot_up();
@@ -419,14 +421,23 @@ JointCommand DriveNode::command() const {
   return c;
 }
 
-void DriveNode::update(const JointMeasurement& m, const rt::ErrorSet& errors) {
+void DriveNode::write_measurement() {
   const double torque_step = drive_.rated_torque_mNm * 1e-6;
+  const JointMeasurement& m = measured_;
   values_[s_.position_demand] = to_raw(m.q_d, 1e-6, INT32_MIN, INT32_MAX);
   values_[s_.position] = to_raw(m.q, 1e-6, INT32_MIN, INT32_MAX);
   values_[s_.velocity] = to_raw(m.dq, 1e-6, INT32_MIN, INT32_MAX);
   values_[s_.torque_actual] = to_raw(m.tau_J, torque_step, INT16_MIN, INT16_MAX);
   values_[s_.torque_demand] = to_raw(m.tau_J_d, torque_step, INT16_MIN, INT16_MAX);
   values_[s_.tau_ext] = to_raw(m.tau_ext_hat_filtered, torque_step, INT16_MIN, INT16_MAX);
+}
+
+void DriveNode::update(const JointMeasurement& m, const rt::ErrorSet& errors, bool mixed_modes) {
+  measured_ = m;
+  write_measurement();
+  const bool in_mix = mixed_modes && state_ == DriveState::kOperationEnabled;
+  if (in_mix && !mixed_modes_reported_) send_emcy(kEmcyMixedModes, -1);   // once per mix; the error register is unchanged
+  mixed_modes_reported_ = in_mix;
   const int64_t limit = values_[s_.max_torque];
   torque_limited_ = std::llabs(values_[s_.target_torque] + values_[s_.torque_offset]) > limit &&
                     state_ == DriveState::kOperationEnabled && values_[s_.mode_display] == kModeCst;

@@ -15,16 +15,36 @@ std::optional<rt::ControlMode> control_mode_of(int8_t mode) {
   }
 }
 
+const char* mode_abbreviation(int8_t mode) {
+  switch (mode) {
+    case kModeCst: return "CST";
+    case kModeCsp: return "CSP";
+    case kModeCsv: return "CSV";
+    default: return "?";
+  }
+}
+
+// "joint 1 CST, 2 CST, 7 CSP": the enabled joints and their modes.
+std::string enabled_modes(const ArmCommand& command) {
+  std::string text;
+  for (int j = 0; j < kJoints; ++j) {
+    if (!command.joints[j].operation_enabled) continue;
+    text += (text.empty() ? "joint " : ", ") + std::to_string(j + 1) + " " + mode_abbreviation(command.joints[j].mode);
+  }
+  return text;
+}
+
 }  // namespace
 
 ServerArm::ServerArm(const rt::Scenario& scenario, const std::string& log_path, bridge::RobotServer::Diagnostic diagnostic)
     : log_(log_path.empty() ? nullptr : std::make_unique<bridge::LogWriter>(log_path)),
+      diagnostic_(std::move(diagnostic)),
       server_(
           scenario.emulator, channels_,
           [this](const std::string& channel, const std::vector<uint8_t>& bytes) {
             if (log_) log_->write(channel, bytes, bridge::now_utime());
           },
-          std::move(diagnostic)) {
+          diagnostic_) {
   if (log_) log_->write(channels_.scenario, bridge::encode(bridge::scenario_message(scenario, "")), bridge::now_utime());
   log_state();
 }
@@ -56,6 +76,18 @@ void ServerArm::log_state() {
   ++state_messages_;
 }
 
+// The server's event record (what RobotServer writes for its own events); replay skips events.
+void ServerArm::log_error(const std::string& text) {
+  if (log_) {
+    event_t e;
+    e.utime = bridge::now_utime();
+    e.time = server_.message_id();
+    e.text = "error: " + text;
+    log_->write(channels_.event, bridge::encode(e), e.utime);
+  }
+  diagnostic_("error: " + text);
+}
+
 rt::Command ServerArm::command_values(rt::ControlMode mode, const ArmCommand& command) {
   rt::Command c;
   bool subtract_gravity = false;
@@ -84,24 +116,29 @@ ArmState ServerArm::cycle(const ArmCommand& command) {
     ++counters_.recoveries;
   }
 
-  bool all_enabled = true, one_mode = true;
+  bool all_enabled = true, mixed = false;
+  std::optional<int8_t> enabled_mode;   // the mode of the first joint in operation enabled
   for (const JointCommand& joint : command.joints) {
     all_enabled = all_enabled && joint.operation_enabled;
-    one_mode = one_mode && joint.mode == command.joints[0].mode;
+    if (!joint.operation_enabled) continue;
+    if (!enabled_mode) enabled_mode = joint.mode;
+    mixed = mixed || joint.mode != *enabled_mode;
   }
-  const std::optional<rt::ControlMode> mode = one_mode ? control_mode_of(command.joints[0].mode) : std::nullopt;
-  if (all_enabled && !all_enabled_before_ && !server_.in_session()) {
+  if (mixed && !mixed_before_) {
+    ++counters_.mixed_modes;
+    log_error("the joints in operation enabled are in different modes of operation (" + enabled_modes(command) +
+              "): no motion runs, the robot takes one control mode per motion; EMCY 0x6320 from each");
+  }
+  mixed_before_ = mixed;
+  const std::optional<rt::ControlMode> mode = all_enabled && !mixed ? control_mode_of(*enabled_mode) : std::nullopt;
+  if (mode && !all_enabled_before_ && !server_.in_session()) {
     // The drives were just enabled: one START_MOTION (refused ones are not retried until the
     // master disables and enables again).
-    if (mode) {
-      request(config_request_t::START_MOTION, *mode);
-      ++counters_.motions;
-      // Until the first command: hold still where the arm is.
-      last_command_ = rt::Command{};
-      if (mode == rt::ControlMode::kJointPosition) last_command_.values = from_array<Vector7>(before.q);
-    } else {
-      ++counters_.mixed_modes;
-    }
+    request(config_request_t::START_MOTION, *mode);
+    ++counters_.motions;
+    // Until the first command: hold still where the arm is.
+    last_command_ = rt::Command{};
+    if (mode == rt::ControlMode::kJointPosition) last_command_.values = from_array<Vector7>(before.q);
   }
   all_enabled_before_ = all_enabled;
 
@@ -117,7 +154,12 @@ ArmState ServerArm::cycle(const ArmCommand& command) {
   }
   server_.step(bridge::now_utime());
   log_state();
+  ArmState state = measured();
+  state.mixed_modes = mixed;
+  return state;
+}
 
+ArmState ServerArm::measured() const {
   const rt::RobotState& s = server_.emulator().state();
   ArmState state;
   for (int j = 0; j < kJoints; ++j)

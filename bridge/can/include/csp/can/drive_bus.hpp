@@ -27,6 +27,9 @@ struct ArmCommand {
 struct ArmState {
   std::array<JointMeasurement, kJoints> joints;
   rt::ErrorSet errors;             // current_errors: non-empty = a reflex stopped the robot
+  // The joints in operation enabled are not all in one mode of operation: the robot runs none of
+  // them (one control mode per motion, as Franka's); each such drive sends EMCY 0x6320 once.
+  bool mixed_modes = false;
 };
 
 // The robot behind the drives: one cycle per SYNC.
@@ -34,6 +37,10 @@ class Arm {
  public:
   virtual ~Arm() = default;
   virtual ArmState cycle(const ArmCommand& command) = 0;
+  // The state before the first cycle: what the drives report before the first SYNC (an SDO read
+  // of 0x6064, the first TPDOs), so that a master reading its start pose early gets the true one.
+  // The default, all zeros, is for stand-in arms without a robot.
+  virtual ArmState measured() const { return {}; }
 };
 
 struct BusSettings {
@@ -54,7 +61,8 @@ struct BusCounters {
 
 class DriveBus {
  public:
-  // Powers the seven nodes on (their boot-up messages are the first frames sent).
+  // Powers the seven nodes on (their boot-up messages are the first frames sent) with the arm's
+  // measured state in their objects.
   DriveBus(const BusSettings& settings, Arm& arm);
   DriveBus(const DriveBus&) = delete;   // the nodes send into this object's outbox
   DriveBus& operator=(const DriveBus&) = delete;

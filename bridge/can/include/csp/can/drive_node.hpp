@@ -36,6 +36,9 @@ inline constexpr uint32_t kToggleBit = 0x05030000, kUnknownCommand = 0x05040001,
 // EMCY codes of the communication layer (CiA 301 / CiA 302 emergency error codes).
 inline constexpr uint16_t kEmcyErrorReset = 0x0000, kEmcyHeartbeat = 0x8130, kEmcyPdoLength = 0x8210,
                           kEmcyPdoLengthExceeded = 0x8220, kEmcySyncLength = 0x8240, kEmcyRpdoTimeout = 0x8250;
+// CiA 402 "parameter error": this drive is in operation enabled in another mode of operation than
+// other enabled drives of the arm, so the robot runs none of them (one control mode per motion).
+inline constexpr uint16_t kEmcyMixedModes = 0x6320;
 
 // One joint's measured state, SI units (libfranka names).
 struct JointMeasurement {
@@ -83,9 +86,10 @@ class DriveNode {
   void sync_transmit();
   void sync_latch();
   JointCommand command() const;
-  // SYNC, second half: the robot's measurement after the cycle; errors of the whole robot
-  // (non-empty = a reflex) fault the drive with one EMCY per error.
-  void update(const JointMeasurement& measured, const rt::ErrorSet& errors);
+  // SYNC, second half (and at power-on): the robot's measurement; errors of the whole robot
+  // (non-empty = a reflex) fault the drive with one EMCY per error; `mixed_modes` (the enabled
+  // drives of the arm are not in one mode) sends EMCY 0x6320 once if this drive is enabled.
+  void update(const JointMeasurement& measured, const rt::ErrorSet& errors, bool mixed_modes);
   // Fault reset (402 bit 7 rising edge) or a write to 0x2003 since the last call.
   bool take_recovery_request();
 
@@ -112,6 +116,7 @@ class DriveNode {
   };
 
   void reset(bool communication_only);
+  void write_measurement();   // measured_ into 0x6062, 0x6064, 0x606C, 0x6074, 0x6077, 0x2001
   void boot_up();
   int slot(uint16_t index, uint8_t subindex) const;
   std::vector<uint8_t> read_bytes(int slot) const;
@@ -143,6 +148,8 @@ class DriveNode {
   bool torque_limited_ = false;        // statusword bit 11: internal limit active
   bool recovery_requested_ = false;
   bool received_since_sync_ = false;
+  bool mixed_modes_reported_ = false;  // EMCY 0x6320 sent for the current mix of modes
+  JointMeasurement measured_;          // the robot's latest: a reset node reports it, not zeros
   std::vector<Pdo> pdos_;              // RPDO1-4 then TPDO1-2
   SdoTransfer sdo_;
   uint32_t heartbeat_elapsed_us_ = 0;

@@ -7,6 +7,8 @@
 // - all seven joints reaching operation enabled in one mode start a motion: CST (10) -> torque
 //   mode (without gravity; 0x2000 = 0: the master's torque includes gravity), CSP (8) -> joint
 //   position mode, CSV (9) -> joint velocity mode, with every check the emulator makes;
+// - joints in operation enabled in different modes run no motion: an error event in the session
+//   log, and ArmState::mixed_modes (EMCY 0x6320 from those drives);
 // - a joint leaving operation enabled, or a mode change, finishes the motion;
 // - a cycle without every enabled joint's RPDO is lost: 20 in a row give the reflex
 //   communication_constraints_violation; any reflex faults every drive (EMCY, 402 fault);
@@ -27,7 +29,7 @@ namespace csp::can {
 
 struct ServerArmCounters {
   uint64_t motions = 0;           // START_MOTION requests sent
-  uint64_t mixed_modes = 0;       // all joints enabled, but not in one mode: no motion
+  uint64_t mixed_modes = 0;       // times the enabled joints came to be in different modes (no motion)
   uint64_t recoveries = 0;        // AUTOMATIC_ERROR_RECOVERY requests sent
 };
 
@@ -37,6 +39,7 @@ class ServerArm : public Arm {
   ServerArm(const rt::Scenario& scenario, const std::string& log_path, bridge::RobotServer::Diagnostic diagnostic);
 
   ArmState cycle(const ArmCommand& command) override;
+  ArmState measured() const override;
 
   const bridge::RobotServer& server() const { return server_; }
   const ServerArmCounters& counters() const { return counters_; }
@@ -48,13 +51,16 @@ class ServerArm : public Arm {
   void send_command(rt::ControlMode mode, const rt::Command& command);
   void deliver(const std::string& channel, const std::vector<uint8_t>& bytes);   // logged, then handled
   void log_state();
+  void log_error(const std::string& text);   // an event record (CSP_EVENT) and a diagnostic line
   rt::Command command_values(rt::ControlMode mode, const ArmCommand& command);
 
   bridge::Channels channels_;
   std::unique_ptr<bridge::LogWriter> log_;
+  bridge::RobotServer::Diagnostic diagnostic_;
   bridge::RobotServer server_;
   ServerArmCounters counters_;
   bool all_enabled_before_ = false;   // the previous cycle had every joint in operation enabled
+  bool mixed_before_ = false;         // the previous cycle's enabled joints were in different modes
   rt::Command last_command_;          // what a finishing command repeats
   int64_t request_id_ = 0;
   uint64_t state_messages_ = 0;
