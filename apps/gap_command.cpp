@@ -41,7 +41,7 @@ std::string read_text(const std::string& path) {
 // the robot file and end effector are the ones the robot ran with, unless given on the command line.
 Model build_model(const GapArguments& args) {
   if (!bridge::is_lcm_log(args.log)) return args.model.build();
-  const std::vector<scenario_t> records = bridge::find_scenario_records(args.log);
+  const std::vector<scenario_t> records = bridge::outline(args.log).scenario_records;
   const auto record = std::find_if(records.begin(), records.end(), [&](const scenario_t& r) {
     return bridge::Channels(r.channel_prefix).state == args.channel;
   });

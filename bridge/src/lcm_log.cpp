@@ -217,12 +217,15 @@ rt::Scenario scenario_from_message(const scenario_t& m) {
   return scenario;
 }
 
-std::vector<scenario_t> find_scenario_records(const std::string& log_path) {
+LogOutline outline(const std::string& log_path) {
   static const std::string kName = "CSP_SCENARIO";
   LogReader log(log_path);
-  std::vector<scenario_t> records;
+  LogOutline outline;
+  std::vector<scenario_t>& records = outline.scenario_records;
   for (const LogEvent* event = log.next(); event; event = log.next()) {
     const std::string& channel = event->channel;
+    if (std::find(outline.channels.begin(), outline.channels.end(), channel) == outline.channels.end())
+      outline.channels.push_back(channel);
     if (channel.size() < kName.size() || channel.compare(channel.size() - kName.size(), kName.size(), kName) != 0) continue;
     scenario_t record;
     if (decode_exact(event->data, event->datalen, record) != Rejection::kNone) continue;
@@ -230,7 +233,7 @@ std::vector<scenario_t> find_scenario_records(const std::string& log_path) {
                                    [&](const scenario_t& r) { return r.channel_prefix == record.channel_prefix; });
     if (!known) records.push_back(record);
   }
-  return records;
+  return outline;
 }
 
 RecordedRobot::RecordedRobot(const scenario_t& record) : recorded_path(record.robot_path) {

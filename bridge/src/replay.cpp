@@ -25,15 +25,6 @@ bool ends_with(const std::string& text, const std::string& tail) {
   return text.size() >= tail.size() && text.compare(text.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-// The channels of a log, in the order they first appear.
-std::vector<std::string> channels_in(const std::string& log_path) {
-  LogReader log(log_path);
-  std::vector<std::string> channels;
-  for (const LogEvent* event = log.next(); event; event = log.next())
-    if (std::find(channels.begin(), channels.end(), event->channel) == channels.end()) channels.push_back(event->channel);
-  return channels;
-}
-
 // The prefix of the first channel named ...CSP_STATE, or null.
 std::optional<std::string> first_state_prefix(const std::vector<std::string>& channels) {
   static const std::string kState = "CSP_STATE";
@@ -54,8 +45,9 @@ std::string damage_of(const std::string& log_path) {
 ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path) {
   ResimulationReport report;
   std::vector<std::string> missing;
-  const std::vector<scenario_t> records = find_scenario_records(log_path);
-  const std::vector<std::string> channel_names = channels_in(log_path);
+  const LogOutline contents = outline(log_path);
+  const std::vector<scenario_t>& records = contents.scenario_records;
+  const std::vector<std::string>& channel_names = contents.channels;
   rt::Scenario scenario;
   std::optional<std::string> prefix;
   if (!records.empty()) prefix = records.front().channel_prefix;
@@ -123,6 +115,12 @@ ResimulationReport resimulate(const std::string& log_path, const std::string& sc
       robot_state_t recorded;
       if (decode_exact(event->data, event->datalen, recorded) != Rejection::kNone)
         throw std::runtime_error(log_path + ": event " + std::to_string(event->eventnum) + " on " + event->channel + " is not a robot_state_t");
+      // The message id is the robot's time: a state that says otherwise is not one of this run (and
+      // its id must not make the robot run to it).
+      if (recorded.message_id != recorded.time)
+        throw std::runtime_error(log_path + ": event " + std::to_string(event->eventnum) + ": a state with message id " +
+                                 std::to_string(recorded.message_id) + " and time " + std::to_string(recorded.time) +
+                                 " ms: not a state of a CSP robot");
       if (compared && recorded.message_id == *compared) continue;   // republished while the robot waited (lcm-logger records it)
       coverage.add(recorded.message_id);
       if (recorded.message_id < server.message_id()) break;         // a new run of the server: the robot cannot go back

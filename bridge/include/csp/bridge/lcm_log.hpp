@@ -95,10 +95,15 @@ scenario_t scenario_message(const rt::Scenario& scenario, const std::string& cha
 // The scenario back from its record (the files are rebuilt in a temporary folder).
 rt::Scenario scenario_from_message(const scenario_t& message);
 
-// The scenario records of a log, wherever they are (a channel ending in CSP_SCENARIO that decodes
-// as scenario_t): the first of each channel prefix, in the order the prefixes first appear. Empty
-// when the log records none (lcm-logger stopped before the server's first republication).
-std::vector<scenario_t> find_scenario_records(const std::string& log_path);
+// What a log holds, read once: its scenario records, wherever they are (a channel ending in
+// CSP_SCENARIO that decodes as scenario_t; the first of each channel prefix, in the order the
+// prefixes first appear; none when lcm-logger stopped before the server's first republication),
+// and its channels in the order they first appear.
+struct LogOutline {
+  std::vector<scenario_t> scenario_records;
+  std::vector<std::string> channels;
+};
+LogOutline outline(const std::string& log_path);
 
 // The robot a scenario record names, for a reader of robot files (csp gap): a temporary copy of the
 // recorded robot file, removed with this object, and the scenario's end effector.
