@@ -89,7 +89,7 @@ ResimulationReport resimulate(const std::string& log_path, const std::string& sc
   const auto run_to = [&](int64_t message_id, const LogEvent& event) {
     // The cycles of the states the recording misses (before its first, in a gap) run with the
     // messages it holds: a missed command shows as a difference in the next state.
-    if (message_id - server.message_id() > kMaxMissedStates)
+    if (message_id > server.message_id() && message_id - server.message_id() > kMaxMissedStates)
       throw std::runtime_error(log_path + ": event " + std::to_string(event.eventnum) + ": message id " + std::to_string(message_id) +
                                " after state " + std::to_string(server.message_id()) + ": more than an hour of states missing");
     while (server.message_id() < message_id) server.step(event.timestamp);
