@@ -1,13 +1,19 @@
 // csp gap: diagnose the sim-to-real gap of a joint log (docs/gap.md): where the simulator model
 // misses, which unmodelled effect is responsible, how far the held-out gap shrinks once it is added.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "csp/bridge/csv_convert.hpp"
+#include "csp/bridge/lcm_log.hpp"
+#include "csp/gap/idle.hpp"
 #include "csp/gap/report.hpp"
 
 namespace csp::cli {
@@ -20,11 +26,63 @@ struct GapArguments {
   double train_fraction = 0.5;
   double sample_period = gap::FilterOptions{}.sample_period;
   unsigned seed = 1;
+  bool keep_idle = false;
+  bool robot_given = false, ee_given = false;   // on the command line (else a session log's recorded ones)
 };
 
-// A CSV joint log, or the robot states of an LCM log: told apart by content, not by name.
-JointLog read_log(const std::string& path, const std::string& channel) {
-  return bridge::is_lcm_log(path) ? bridge::read_joint_log_lcm(path, channel) : read_joint_log_csv(path);
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The simulator model. For the log of a CSP session (an LCM log with the robot's scenario record)
+// the robot file and end effector are the ones the robot ran with, unless given on the command line.
+Model build_model(const GapArguments& args) {
+  if (!bridge::is_lcm_log(args.log)) return args.model.build();
+  const std::vector<scenario_t> records = bridge::outline(args.log).scenario_records;
+  const auto record = std::find_if(records.begin(), records.end(), [&](const scenario_t& r) {
+    return bridge::Channels(r.channel_prefix).state == args.channel;
+  });
+  if (record == records.end()) return args.model.build();
+  const bridge::RecordedRobot recorded(*record);
+  ModelArguments model = args.model;
+  std::vector<std::string> notes;
+  if (!args.robot_given) model.robot = recorded.robot_file;
+  else if (read_text(args.model.robot) != record->robot_text)
+    notes.push_back("--robot " + args.model.robot + " differs from the robot file it recorded (" + recorded.recorded_path + ")");
+  if (!args.ee_given) model.end_effector = recorded.end_effector;
+  else if (args.model.end_effector != recorded.end_effector)
+    notes.push_back("--ee " + args.model.end_effector + " differs from the end effector it recorded (" + recorded.end_effector + ")");
+  if (recorded.scene_tool) notes.push_back("its scenario's scene mounts a tool, which is not taken (give it as --load-*)");
+  std::cerr << "csp gap: " << args.log << ": the robot's recorded scenario " << record->path << ": "
+            << (args.robot_given ? "--robot " + args.model.robot : "its robot file " + recorded.recorded_path)
+            << (args.ee_given ? ", --ee " : ", its end effector ") << model.end_effector << "\n";
+  for (const std::string& note : notes) std::cerr << "csp gap: " << args.log << ": " << note << "\n";
+  try {
+    return model.build();
+  } catch (const ConfigError& e) {
+    if (args.robot_given) throw;
+    throw ConfigError("the robot file recorded in " + args.log + " (" + recorded.recorded_path + ") cannot be used: " + e.what() +
+                      "; give --robot");
+  }
+}
+
+// A CSV joint log, or the robot states of an LCM log: told apart by content, not by name. Its idle
+// stretches are left out (and said so) unless --keep-idle.
+JointLog read_log(const std::string& path, const GapArguments& args, const gap::FilterOptions& filter) {
+  const JointLog log = bridge::is_lcm_log(path) ? bridge::read_joint_log_lcm(path, args.channel) : read_joint_log_csv(path);
+  if (args.keep_idle) return log;
+  gap::IdleTrim trim = gap::leave_out_idle(log, filter);
+  if (trim.stretches > 0) {
+    const gap::IdleOptions idle;
+    std::cerr << "csp gap: " << path << ": left out " << std::fixed << std::setprecision(2) << trim.seconds_left_out
+              << std::defaultfloat << " s of idle in "
+              << trim.stretches << (trim.stretches == 1 ? " stretch" : " stretches") << " (every joint slower than "
+              << idle.velocity << " rad/s for " << idle.min_duration << " s or more; --keep-idle keeps them)\n";
+  }
+  return std::move(trim.log);
 }
 
 int run_gap(const GapArguments& args, const std::string& command_line) {
@@ -32,17 +90,22 @@ int run_gap(const GapArguments& args, const std::string& command_line) {
     throw UsageError("--train-fraction: expected a number between 0 and 1");
   if (!(args.sample_period > 0.0 && args.sample_period <= 0.02))
     throw UsageError("--sample-period: expected a period in (0, 0.02] s");
-  const Model model = args.model.build();
+  const Model model = build_model(args);
   gap::DiagnosisOptions options;
   options.train_fraction = args.train_fraction;
   options.filter.sample_period = args.sample_period;
   options.seed = args.seed;
-  const JointLog log = read_log(args.log, args.channel);
+  const JointLog log = read_log(args.log, args, options.filter);
   const auto start = std::chrono::steady_clock::now();
   const gap::Diagnosis diagnosis = args.heldout.empty()
                                        ? gap::diagnose(model, log, options)
-                                       : gap::diagnose(model, log, read_log(args.heldout, args.channel), options);
+                                       : gap::diagnose(model, log, read_log(args.heldout, args, options.filter), options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double idle_share = gap::idle_fraction(diagnosis.heldout.samples);
+  if (idle_share > 0.5)
+    std::cerr << "csp gap: warning: the arm is at rest in " << std::lround(100.0 * idle_share)
+              << " % of the held-out part: the verdict judges standing still more than motion (give a log with more motion, or "
+                 "--log-heldout)\n";
 
   std::cout << "csp gap: " << args.log
             << (args.heldout.empty() ? " (first " + std::to_string(static_cast<int>(100 * args.train_fraction)) +
@@ -87,9 +150,13 @@ Command add_gap_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--seed", args->seed, "Seed of the random regressors of the significance test")
       ->capture_default_str();
+  command->add_flag("--keep-idle", args->keep_idle,
+                    "Keep the idle stretches (every joint slower than 0.01 rad/s for 0.5 s or more), which are left out by default");
   command->add_option("--json", args->json, "Write the diagnosis as JSON (docs/gap.md: the output contract)");
   command->add_option("--report", args->report, "Write report.md and SVG figures into this directory");
   return [args, command] {
+    args->robot_given = command->get_option("--robot")->count() > 0;
+    args->ee_given = command->get_option("--ee")->count() > 0;
     std::string line = "csp gap";
     for (const CLI::Option* option : command->get_options())
       if (option->count() > 0 && !option->get_name().empty() && option->get_name() != "--help")

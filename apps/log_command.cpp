@@ -40,6 +40,7 @@ Command add_log_command(CLI::App& app) {
                   static_cast<unsigned long long>(r.rows), args->out.c_str(), static_cast<unsigned long long>(r.repeated),
                   static_cast<unsigned long long>(r.rejected));
       if (r.rows == 0) throw std::runtime_error(args->input + ": no robot_state_t on channel " + args->channel);
+      if (!r.missing.empty()) std::fprintf(stderr, "csp log export: %s: not in the recording: %s\n", args->input.c_str(), r.missing.c_str());
       if (r.damage.empty()) return 0;
       std::fprintf(stderr, "csp log export: %s: only the readable part was exported\n", r.damage.c_str());
       return 1;

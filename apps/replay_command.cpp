@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "cli_options.hpp"
 #include "commands.hpp"
 #include "csp/bridge/replay.hpp"
 
@@ -14,7 +15,7 @@ namespace {
 std::atomic<bool> interrupted{false};
 
 struct ReplayArguments {
-  std::string log;
+  std::string log, scenario;
   bool play = false;
   double speed = 1.0;
   double max_gap = 10.0;
@@ -22,6 +23,7 @@ struct ReplayArguments {
 };
 
 int run_replay(const ReplayArguments& args) {
+  if (args.play && !args.scenario.empty()) throw UsageError("--scenario: re-simulation only; --play publishes the log as it is");
   if (args.play) {
     std::signal(SIGINT, [](int) { interrupted = true; });
     bridge::PlaybackOptions options;
@@ -39,9 +41,13 @@ int run_replay(const ReplayArguments& args) {
     std::fprintf(stderr, "csp replay: %s\n", r.damage.c_str());
     return 1;
   }
-  const bridge::ResimulationReport r = bridge::resimulate(args.log);
-  std::printf("csp replay: %s: re-simulated %llu states from %llu recorded commands and requests\n", args.log.c_str(),
-              static_cast<unsigned long long>(r.states), static_cast<unsigned long long>(r.messages));
+  const bridge::ResimulationReport r = bridge::resimulate(args.log, args.scenario);
+  std::printf("csp replay: %s: re-simulated %llu states from %llu recorded commands and requests\n  scenario: %s\n",
+              args.log.c_str(), static_cast<unsigned long long>(r.states), static_cast<unsigned long long>(r.messages),
+              r.scenario.c_str());
+  if (!r.missing.empty())
+    std::fprintf(stderr, "csp replay: %s: not in the recording: %s (the recorded states are compared all the same)\n",
+                 args.log.c_str(), r.missing.c_str());
   if (r.differing_states > 0)
     std::printf("  %llu states differ, max |difference| %.3g, first at %s\n", static_cast<unsigned long long>(r.differing_states),
                 r.max_difference, r.first_difference.c_str());
@@ -59,6 +65,8 @@ Command add_replay_command(CLI::App& app) {
   auto args = std::make_shared<ReplayArguments>();
   CLI::App* cmd = app.add_subcommand("replay", "Re-simulate a CSP LCM log (default) or play a log back onto LCM (--play)");
   cmd->add_option("log", args->log, "LCM log file")->required();
+  cmd->add_option("--scenario", args->scenario,
+                  "The scenario the robot ran, for a recording without its CSP_SCENARIO record (used instead of the record if given)");
   cmd->add_flag("--play", args->play, "Publish the log's events on LCM at their recorded timing, like lcm-logplayer");
   cmd->add_option("--speed", args->speed, "--play: speed factor (2: twice as fast, 0: as fast as possible)")->capture_default_str();
   cmd->add_option("--max-gap", args->max_gap, "--play: seconds of log time beyond which a timestamp jump is not waited for")

@@ -282,6 +282,84 @@ TEST(BridgeLog, ReplayNoticesATamperedLog) {
   std::filesystem::remove(path);
 }
 
+// A session as a logger on the bus records it, written in-process: `cycles` cycles of the robot
+// server, idle until `start`, then a joint impedance session; the bus order a recording may have,
+// with the START_MOTION request before the state of the cycle the server took it in (it arrived
+// while that state was being published) and its reply after; the scenario record republished at
+// `record_at`; another robot's states and a foreign channel mixed in. Events before cycle `first`
+// are not in the recording.
+void write_bus_recording(const std::string& path, const rt::Scenario& scenario, int first, int record_at, int start, int cycles) {
+  LogWriter log(path);
+  const Channels channels("ARM1_"), other("ARM2_");
+  const std::vector<uint8_t> record = encode(scenario_message(scenario, "ARM1_"));
+  std::vector<std::pair<std::string, std::vector<uint8_t>>> replies;
+  RobotServer server(scenario.emulator, channels, [&](const std::string& channel, const std::vector<uint8_t>& bytes) {
+    if (channel == channels.config_reply) replies.emplace_back(channel, bytes);
+  }, [](const std::string&) {});
+  const rt::Controller controller =
+      joint_impedance_controller(example_joint_stiffness(), example_joint_damping(), example_excitation(0.2), 0.2);
+  rt::Duration period(0);
+  const auto recorded = [&](int cycle, const std::string& channel, const std::vector<uint8_t>& bytes) {
+    if (cycle >= first) log.write(channel, bytes, 1'000'000 + 1000 * cycle);
+  };
+  for (int cycle = 0; cycle < cycles; ++cycle) {
+    if (cycle == 0 || cycle == record_at) recorded(cycle, channels.scenario, record);
+    config_request_t start_motion{};
+    start_motion.request = config_request_t::START_MOTION;
+    start_motion.request_id = 7;
+    start_motion.control_mode = control_mode_code(rt::ControlMode::kTorque);
+    if (cycle == start) recorded(cycle, channels.config, encode(start_motion));   // on the bus before the state
+    recorded(cycle, channels.state, encode(server.state_message(0)));
+    recorded(cycle, other.state, encode(to_message(rt::RobotState{}, 0, false)));
+    recorded(cycle, "TEST_MARKER", {1, 2, 3});
+    if (cycle == start) {
+      const std::vector<uint8_t> bytes = encode(start_motion);
+      server.receive(channels.config, bytes.data(), static_cast<int>(bytes.size()), 0);
+      for (const auto& [channel, reply] : replies) recorded(cycle, channel, reply);
+    }
+    if (server.in_session()) {
+      const std::vector<uint8_t> command =
+          encode_command(rt::ControlMode::kTorque, server.message_id(), controller(server.emulator().state(), period), 0);
+      period = rt::Duration(1);
+      server.receive(channels.command, command.data(), static_cast<int>(command.size()), 0);
+      recorded(cycle, channels.command, command);
+    }
+    server.step(0);
+  }
+}
+
+// A recording begun late, its scenario record republished in the middle, other channels mixed in:
+// re-simulated bit for bit from the robot's start, with what it misses named; without any record,
+// from --scenario, and refused without it.
+TEST(BridgeLog, ReplaysARecordingOfTheBusBegunLate) {
+  const rt::Scenario scenario = default_scenario();
+  const std::string path = test::temp_path("bus.lcmlog"), bare = test::temp_path("bus-no-record.lcmlog");
+  write_bus_recording(path, scenario, 100, 250, 200, 500);
+  const ResimulationReport replay = resimulate(path);
+  EXPECT_EQ(replay.states, 400u);
+  EXPECT_EQ(replay.differing_states, 0u) << replay.first_difference;
+  EXPECT_TRUE(replay.identical());
+  EXPECT_EQ(replay.missing, "the first 100 states (message ids 0-99)");
+  EXPECT_NE(replay.scenario.find("the log's CSP_SCENARIO record"), std::string::npos) << replay.scenario;
+  const ExportReport exported = for_each_logged_state(path, "ARM1_CSP_STATE", [](const rt::RobotState&, bool) {});
+  EXPECT_EQ(exported.rows, 400u);
+  EXPECT_EQ(exported.missing, replay.missing);
+
+  write_bus_recording(bare, scenario, 100, -1, 200, 500);
+  try {
+    resimulate(bare);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no CSP_SCENARIO record"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--scenario FILE"), std::string::npos) << e.what();
+  }
+  const ResimulationReport from_file = resimulate(bare, rt::default_scenario_path());
+  EXPECT_TRUE(from_file.identical()) << from_file.first_difference;
+  EXPECT_EQ(from_file.states, 400u);
+  EXPECT_EQ(from_file.missing, "no CSP_SCENARIO record; the first 100 states (message ids 0-99)");
+  for (const std::string& f : {path, bare}) std::filesystem::remove(f);
+}
+
 TEST(BridgeLog, RejectsWhatIsNotACspLog) {
   EXPECT_THROW(resimulate(test::temp_path("missing.lcmlog")), std::runtime_error);
   const std::string path = test::temp_path("foreign.lcmlog");

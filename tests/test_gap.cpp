@@ -8,6 +8,7 @@
 
 #include "csp/gap/diagnosis.hpp"
 #include "csp/gap/generator.hpp"
+#include "csp/gap/idle.hpp"
 #include "support.hpp"
 
 namespace csp::test {
@@ -94,6 +95,109 @@ TEST(GapLog, TooShortForTheFilter) {
     FAIL() << "expected JointLogError";
   } catch (const JointLogError& e) {
     EXPECT_NE(std::string(e.what()).find("too short for the smoothing filter"), std::string::npos) << e.what();
+  }
+}
+
+// Rows appended to a log at 1 ms steps, marked in x_segment: the arm at `q` (plus `velocity` t),
+// with the generator's noise levels on dq and the torque (the real Panda log's).
+void append_still(JointLog& log, double seconds, Vector7 q, const Vector7& tau, const Vector7& velocity, double segment,
+                  std::mt19937& random) {
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const LogOptions noise;
+  for (int k = 0; k < std::lround(seconds * 1000.0); ++k) {
+    log.t.push_back(log.t.back() + 1e-3);
+    q += 1e-3 * velocity;
+    Vector7 dq = velocity, tau_J = tau;
+    for (int j = 0; j < kNumJoints; ++j) dq[j] += noise.velocity_noise * unit(random), tau_J[j] += noise.torque_noise[j] * unit(random);
+    log.q.push_back(q), log.dq.push_back(dq), log.tau_J.push_back(tau_J);
+    log.extensions[0].values.push_back(segment);
+  }
+}
+
+// Rows [begin, end) of a generated motion appended after the log's last row, marked in x_segment.
+void append_motion(JointLog& log, const JointLog& motion, std::size_t begin, std::size_t end, double segment) {
+  for (std::size_t k = begin; k < end; ++k) {
+    log.t.push_back(log.t.back() + (k == begin ? 1e-3 : motion.t[k] - motion.t[k - 1]));
+    log.q.push_back(motion.q[k]), log.dq.push_back(motion.dq[k]), log.tau_J.push_back(motion.tau_J[k]);
+    log.extensions[0].values.push_back(segment);
+  }
+}
+
+// Idle stretches (docs/gap.md): left out when every joint stands still for 0.5 s or more, with 0.1 s
+// kept next to the motion; a short pause and a slow single-joint motion stay; the motion's rows come
+// back unchanged and the rows after a stretch move back in time by what was left out.
+TEST(GapIdle, LeavesOutLongStillStretchesOnly) {
+  const Model model = diagnosing_model();
+  const JointLog motion = plain_log(model, 3.0, 4);
+  const std::size_t third = motion.size() / 3;
+  std::mt19937 random(5);
+  JointLog log;
+  log.source = "idle test";
+  log.t.push_back(0.0), log.q.push_back(motion.q[0]), log.dq.push_back(Vector7::Zero()), log.tau_J.push_back(motion.tau_J[0]);
+  log.extensions.push_back({"x_segment", {0.0}});
+  enum Segment { kStillBefore, kMotion1, kStillBetween, kMotion2, kPause, kMotion3, kSlow, kStillAfter };
+  const Vector7 still = Vector7::Zero(), slow = 0.02 * Vector7::Unit(2);   // one joint at 2 x the threshold
+  append_still(log, 1.0, motion.q[0], motion.tau_J[0], still, kStillBefore, random);
+  append_motion(log, motion, 0, third, kMotion1);
+  append_still(log, 0.8, motion.q[third - 1], motion.tau_J[third - 1], still, kStillBetween, random);
+  append_motion(log, motion, third, 2 * third, kMotion2);
+  append_still(log, 0.3, motion.q[2 * third - 1], motion.tau_J[2 * third - 1], still, kPause, random);
+  append_motion(log, motion, 2 * third, motion.size(), kMotion3);
+  append_still(log, 0.7, motion.q.back(), motion.tau_J.back(), slow, kSlow, random);
+  append_still(log, 0.7, log.q.back(), motion.tau_J.back(), still, kStillAfter, random);
+  check_joint_log(log);
+
+  const FilterOptions filter;
+  const IdleTrim trim = leave_out_idle(log, filter);
+  EXPECT_EQ(trim.stretches, 3);
+  check_joint_log(trim.log);
+  std::map<int, int> rows_of;   // segment -> rows kept
+  for (const double segment : trim.log.extensions.at(0).values) ++rows_of[static_cast<int>(segment)];
+  // Kept whole: the motion (its rows unchanged, in order), the 0.3 s pause, the slow joint.
+  EXPECT_EQ(rows_of[kMotion1] + rows_of[kMotion2] + rows_of[kMotion3], static_cast<int>(motion.size()));
+  EXPECT_EQ(rows_of[kPause], 300);
+  EXPECT_EQ(rows_of[kSlow], 700);
+  std::size_t next_motion_row = 0;
+  for (std::size_t k = 0; k < trim.log.size(); ++k) {
+    const int segment = static_cast<int>(trim.log.extensions[0].values[k]);
+    if (segment != kMotion1 && segment != kMotion2 && segment != kMotion3) continue;
+    ASSERT_EQ(trim.log.q[k], motion.q[next_motion_row]) << k;
+    ASSERT_EQ(trim.log.tau_J[k], motion.tau_J[next_motion_row]) << k;
+    ++next_motion_row;
+  }
+  // Of each stretch, the margin (0.1 s) is kept next to the motion, and the filter's half window
+  // (50 ms) plus one sample period (10 ms) where the motion's velocity still shows.
+  const auto kept_between = [](int rows, double margin_seconds) {
+    return rows >= std::lround(margin_seconds * 1000.0) && rows <= std::lround(margin_seconds * 1000.0 + 60.0 * margin_seconds / 0.1);
+  };
+  EXPECT_TRUE(kept_between(rows_of[kStillBefore], 0.1)) << rows_of[kStillBefore];
+  EXPECT_TRUE(kept_between(rows_of[kStillBetween], 0.2)) << rows_of[kStillBetween];
+  EXPECT_TRUE(kept_between(rows_of[kStillAfter], 0.1)) << rows_of[kStillAfter];
+  // Time closes over what was left out: the still rows are 1 ms apart, so the seconds left out are
+  // the rows left out times 1 ms (the rows either side of a stretch join one original step apart).
+  const auto rows_left_out = static_cast<double>(log.size() - trim.log.size());
+  EXPECT_NEAR(trim.seconds_left_out, 1e-3 * rows_left_out, 1e-9);
+  for (std::size_t k = 1; k < trim.log.size(); ++k) ASSERT_LE(trim.log.t[k] - trim.log.t[k - 1], 1.1e-3 + 1e-12) << k;
+
+  // The share of samples at rest: the still stretches and the pause (2.8 s of the 6.4 s the filter's
+  // samples span) less at most 0.1 s at each of their 6 edges next to motion, which the filter
+  // smears, before; at most the margins and the pause, after.
+  const double before = idle_fraction(filter_log(log, filter)), after = idle_fraction(filter_log(trim.log, filter));
+  EXPECT_GE(before, (2.8 - 6 * 0.1) / 6.4);
+  EXPECT_LE(before, 2.8 / 6.4);
+  EXPECT_LT(after, 0.8 / (6.4 - trim.seconds_left_out));
+
+  // A log that never moves has nothing to diagnose.
+  JointLog still_log = log;
+  still_log.clear_rows();
+  still_log.t.push_back(0.0), still_log.q.push_back(motion.q[0]), still_log.dq.push_back(still), still_log.tau_J.push_back(motion.tau_J[0]);
+  still_log.extensions[0].values.push_back(0.0);
+  append_still(still_log, 2.0, motion.q[0], motion.tau_J[0], still, kStillBefore, random);
+  try {
+    leave_out_idle(still_log, filter);
+    FAIL() << "expected JointLogError";
+  } catch (const JointLogError& e) {
+    EXPECT_NE(std::string(e.what()).find("idle test: the arm does not move"), std::string::npos) << e.what();
   }
 }
 

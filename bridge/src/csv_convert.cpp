@@ -14,6 +14,7 @@ ExportReport for_each_logged_state(const std::string& log_path, const std::strin
                                    const std::function<void(const rt::RobotState&, bool command_received)>& visit) {
   LogReader log(log_path);
   ExportReport report;
+  StateCoverage coverage;
   std::optional<robot_state_t> last;
   for (const LogEvent* event = log.next(); event; event = log.next()) {
     if (event->channel != state_channel) continue;
@@ -28,10 +29,12 @@ ExportReport for_each_logged_state(const std::string& log_path, const std::strin
       continue;
     }
     last = m;
+    coverage.add(m.message_id);
     visit(from_message(m), m.command_received != 0);
     ++report.rows;
   }
   report.damage = log.damage_summary();
+  report.missing = coverage.missing();
   return report;
 }
 

@@ -3,6 +3,7 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -29,6 +30,16 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
 
 constexpr uint32_t kSyncWord = 0xEDA1DA01;
 constexpr uint64_t kHeaderBytes = 4 + 8 + 8 + 4 + 4;
+
+// A folder of its own under the system's temporary directory, for files rebuilt from a record.
+std::filesystem::path temporary_folder(const std::string& purpose) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("csp-" + purpose + "-" + std::to_string(getpid()) + "-" + std::to_string(now_utime()));
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string count_of(uint64_t n, const std::string& thing) { return std::to_string(n) + " " + thing + (n == 1 ? "" : "s"); }
 
 uint64_t big_endian(const uint8_t* bytes, int count) {
   uint64_t value = 0;
@@ -175,9 +186,7 @@ scenario_t scenario_message(const rt::Scenario& scenario, const std::string& cha
 
 rt::Scenario scenario_from_message(const scenario_t& m) {
   // load_scenario reads files and finds the robot file relative to the scenario: rebuild both.
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("csp-replay-" + std::to_string(getpid()) + "-" + std::to_string(now_utime()));
-  std::filesystem::create_directories(dir);
+  const std::filesystem::path dir = temporary_folder("replay");
   rt::Scenario scenario;
   try {
     check_yaml_layout(m.text, "the recorded scenario " + m.path);
@@ -206,6 +215,70 @@ rt::Scenario scenario_from_message(const scenario_t& m) {
   scenario.command_faults.seed = scenario.seed + 1;   // as load_scenario derives it
   scenario.clock = m.clock == "realtime" ? rt::Clock::kRealtime : rt::Clock::kLockstep;
   return scenario;
+}
+
+LogOutline outline(const std::string& log_path) {
+  static const std::string kName = "CSP_SCENARIO";
+  LogReader log(log_path);
+  LogOutline outline;
+  std::vector<scenario_t>& records = outline.scenario_records;
+  for (const LogEvent* event = log.next(); event; event = log.next()) {
+    const std::string& channel = event->channel;
+    if (std::find(outline.channels.begin(), outline.channels.end(), channel) == outline.channels.end())
+      outline.channels.push_back(channel);
+    if (channel.size() < kName.size() || channel.compare(channel.size() - kName.size(), kName.size(), kName) != 0) continue;
+    scenario_t record;
+    if (decode_exact(event->data, event->datalen, record) != Rejection::kNone) continue;
+    const bool known = std::any_of(records.begin(), records.end(),
+                                   [&](const scenario_t& r) { return r.channel_prefix == record.channel_prefix; });
+    if (!known) records.push_back(record);
+  }
+  return outline;
+}
+
+RecordedRobot::RecordedRobot(const scenario_t& record) : recorded_path(record.robot_path) {
+  try {
+    check_yaml_layout(record.text, "the recorded scenario " + record.path);
+    const YAML::Node root = YAML::Load(record.text);
+    end_effector = root["end_effector"] ? root["end_effector"].as<std::string>() : "none";
+    scene_tool = static_cast<bool>(root["scene"]);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("the scenario record cannot be read: " + printable_key(e.what()));
+  }
+  robot_file = (temporary_folder("robot") / "robot.yaml").string();
+  write_text(robot_file, record.robot_text);
+}
+
+RecordedRobot::~RecordedRobot() {
+  std::error_code error;
+  std::filesystem::remove_all(std::filesystem::path(robot_file).parent_path(), error);
+}
+
+void StateCoverage::add(int64_t message_id) {
+  if (states_++ == 0) {
+    first_ = last_ = message_id;
+    return;
+  }
+  if (message_id <= last_) {
+    ++restarts_;
+  } else if (message_id > last_ + 1) {
+    if (gaps_++ == 0) first_gap_after_ = last_;
+    missing_ += static_cast<uint64_t>(message_id - last_ - 1);
+  }
+  last_ = message_id;
+}
+
+std::string StateCoverage::missing() const {
+  std::vector<std::string> parts;
+  if (before_first() > 0)
+    parts.push_back("the first " + count_of(before_first(), "state") + " (message ids 0-" + std::to_string(first_ - 1) + ")");
+  if (gaps_ > 0)
+    parts.push_back(count_of(missing_, "state") + " in " + count_of(gaps_, "gap") + " of message ids, the first after id " +
+                    std::to_string(first_gap_after_));
+  if (restarts_ > 0) parts.push_back("message ids start again " + count_of(restarts_, "time") + " (several runs in one recording)");
+  std::string text;
+  for (const std::string& part : parts) text += (text.empty() ? "" : "; ") + part;
+  return text;
 }
 
 EmulateLogRecorder::EmulateLogRecorder(const std::string& path, const rt::Scenario& scenario, const rt::Emulator& emulator,

@@ -4,8 +4,11 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
+#include <optional>
 
 #include "csp/bridge/lcm_log.hpp"
 #include "csp/bridge/lcm_url.hpp"
@@ -13,43 +16,118 @@
 
 namespace csp::bridge {
 
-ResimulationReport resimulate(const std::string& log_path) {
+namespace {
+
+// The states a recording may miss in a row (an hour of cycles, re-simulated in about a minute).
+constexpr int64_t kMaxMissedStates = 3'600'000;
+
+bool ends_with(const std::string& text, const std::string& tail) {
+  return text.size() >= tail.size() && text.compare(text.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// The prefix of the first channel named ...CSP_STATE, or null.
+std::optional<std::string> first_state_prefix(const std::vector<std::string>& channels) {
+  static const std::string kState = "CSP_STATE";
+  for (const std::string& channel : channels)
+    if (ends_with(channel, kState)) return channel.substr(0, channel.size() - kState.size());
+  return std::nullopt;
+}
+
+std::string damage_of(const std::string& log_path) {
   LogReader log(log_path);
-  // Both come from the scenario record, the log's first event.
-  std::unique_ptr<RobotServer> server;
-  std::unique_ptr<Channels> channels;
+  while (log.next()) {
+  }
+  return log.damage_summary();
+}
+
+}  // namespace
+
+ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path) {
   ResimulationReport report;
-  bool first_state = true;
-  for (const LogEvent* event = log.next(); event; event = log.next()) {
-    if (!server) {
-      // The scenario record comes first: it names the channels and rebuilds the emulator.
-      scenario_t record;
-      if (event->channel.size() < 12 || event->channel.compare(event->channel.size() - 12, 12, "CSP_SCENARIO") != 0 ||
-          decode_exact(event->data, event->datalen, record) != Rejection::kNone)
-        throw std::runtime_error(log_path + ": the first event is not a CSP_SCENARIO record (not a log written by csp serve or csp emulate --lcm-log)" +
-                                 (log.damage().empty() ? "" : "; " + log.damage_summary()));
-      rt::Scenario scenario;
-      try {
-        scenario = scenario_from_message(record);
-      } catch (const std::exception& e) {
-        throw std::runtime_error(log_path + ": event " + std::to_string(event->eventnum) + ": " + e.what());
-      }
-      channels = std::make_unique<Channels>(record.channel_prefix);
-      server = std::make_unique<RobotServer>(scenario.emulator, *channels, [](const std::string&, const std::vector<uint8_t>&) {},
-                                             [](const std::string&) {});
-      continue;
+  std::vector<std::string> missing;
+  const LogOutline contents = outline(log_path);
+  const std::vector<scenario_t>& records = contents.scenario_records;
+  const std::vector<std::string>& channel_names = contents.channels;
+  rt::Scenario scenario;
+  std::optional<std::string> prefix;
+  if (!records.empty()) prefix = records.front().channel_prefix;
+  if (!scenario_path.empty()) {
+    scenario = rt::load_scenario(scenario_path);
+    report.scenario = scenario_path + " (--scenario)" + (records.empty() ? "" : ", not the log's own record");
+    if (records.empty()) {
+      missing.push_back("no CSP_SCENARIO record");
+      prefix = first_state_prefix(channel_names);
     }
-    if (event->channel == channels->command || event->channel == channels->config) {
-      server->receive(event->channel, event->data, event->datalen, event->timestamp);
+  } else if (!records.empty()) {
+    try {
+      scenario = scenario_from_message(records.front());
+    } catch (const std::exception& e) {
+      throw std::runtime_error(log_path + ": " + e.what());
+    }
+    report.scenario = "the log's CSP_SCENARIO record (" + records.front().path + ")";
+  } else {
+    const std::string damage = damage_of(log_path);
+    throw std::runtime_error(log_path + ": no CSP_SCENARIO record (not a recording of csp serve or csp emulate --lcm-log, or one " +
+                             "that ended before the server republished it): give the scenario the robot ran with --scenario FILE" +
+                             (damage.empty() ? "" : "; " + damage));
+  }
+  if (!prefix) throw std::runtime_error(log_path + ": no robot state (no channel named ...CSP_STATE)");
+  if (records.size() > 1) report.scenario += "; the log holds " + std::to_string(records.size()) + " robots, this one is prefix `" + *prefix + "`";
+
+  LogReader log(log_path);
+  const Channels channels(*prefix);
+  RobotServer server(scenario.emulator, channels, [](const std::string&, const std::vector<uint8_t>&) {}, [](const std::string&) {});
+  StateCoverage coverage;
+  std::optional<int64_t> compared;   // message id of the last state compared
+  // A configuration request has no message id, and a recording of the bus may hold it before the
+  // state of the cycle the server took it in (it arrived while that state was being published).
+  // The server's reply names that cycle: when the log holds replies (all but csp emulate's), each
+  // request waits for its reply. A request that does not decode gets no reply: it goes at once.
+  const bool requests_wait_for_replies =
+      std::find(channel_names.begin(), channel_names.end(), channels.config_reply) != channel_names.end();
+  std::map<int64_t, std::vector<uint8_t>> requests;   // waiting for their reply, by request_id
+  const auto run_to = [&](int64_t message_id, const LogEvent& event) {
+    // The cycles of the states the recording misses (before its first, in a gap) run with the
+    // messages it holds: a missed command shows as a difference in the next state.
+    if (message_id > server.message_id() && message_id - server.message_id() > kMaxMissedStates)
+      throw std::runtime_error(log_path + ": event " + std::to_string(event.eventnum) + ": message id " + std::to_string(message_id) +
+                               " after state " + std::to_string(server.message_id()) + ": more than an hour of states missing");
+    while (server.message_id() < message_id) server.step(event.timestamp);
+  };
+  for (const LogEvent* event = log.next(); event; event = log.next()) {
+    config_request_t request;
+    config_reply_t reply;
+    if (event->channel == channels.config && requests_wait_for_replies &&
+        decode_exact(event->data, event->datalen, request) == Rejection::kNone) {
+      const auto* bytes = static_cast<const uint8_t*>(event->data);
+      requests[request.request_id].assign(bytes, bytes + event->datalen);
+    } else if (event->channel == channels.config_reply && decode_exact(event->data, event->datalen, reply) == Rejection::kNone &&
+               requests.count(reply.request_id) > 0) {
+      const std::vector<uint8_t> bytes = std::move(requests[reply.request_id]);
+      requests.erase(reply.request_id);
+      run_to(reply.message_id, *event);
+      server.receive(channels.config, bytes.data(), static_cast<int>(bytes.size()), event->timestamp);
       ++report.messages;
-    } else if (event->channel == channels->state) {
+    } else if (event->channel == channels.command || event->channel == channels.config) {
+      server.receive(event->channel, event->data, event->datalen, event->timestamp);
+      ++report.messages;
+    } else if (event->channel == channels.state) {
       robot_state_t recorded;
       if (decode_exact(event->data, event->datalen, recorded) != Rejection::kNone)
         throw std::runtime_error(log_path + ": event " + std::to_string(event->eventnum) + " on " + event->channel + " is not a robot_state_t");
-      if (!first_state) server->step(event->timestamp);   // each recorded state after the first ends a cycle
-      first_state = false;
+      // The message id is the robot's time: a state that says otherwise is not one of this run (and
+      // its id must not make the robot run to it).
+      if (recorded.message_id != recorded.time)
+        throw std::runtime_error(log_path + ": event " + std::to_string(event->eventnum) + ": a state with message id " +
+                                 std::to_string(recorded.message_id) + " and time " + std::to_string(recorded.time) +
+                                 " ms: not a state of a CSP robot");
+      if (compared && recorded.message_id == *compared) continue;   // republished while the robot waited (lcm-logger records it)
+      coverage.add(recorded.message_id);
+      if (recorded.message_id < server.message_id()) break;         // a new run of the server: the robot cannot go back
+      run_to(recorded.message_id, *event);
+      compared = recorded.message_id;
       std::string field;
-      const double difference = state_difference(recorded, server->state_message(recorded.utime), field);
+      const double difference = state_difference(recorded, server.state_message(recorded.utime), field);
       ++report.states;
       if (field.empty()) continue;
       ++report.differing_states;
@@ -57,7 +135,10 @@ ResimulationReport resimulate(const std::string& log_path) {
       if (report.first_difference.empty()) report.first_difference = "time " + std::to_string(recorded.time) + " ms: " + field;
     }
   }
-  if (!server) throw std::runtime_error(log_path + ": empty log" + (log.damage().empty() ? "" : " (" + log.damage_summary() + ")"));
+  if (report.states == 0)
+    throw std::runtime_error(log_path + ": no robot state on " + channels.state + (log.damage().empty() ? "" : " (" + log.damage_summary() + ")"));
+  if (!coverage.missing().empty()) missing.push_back(coverage.missing());
+  for (const std::string& part : missing) report.missing += (report.missing.empty() ? "" : "; ") + part;
   report.damage = log.damage_summary();
   return report;
 }

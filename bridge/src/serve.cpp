@@ -19,15 +19,21 @@ using rt::monotonic_ns;
 constexpr int64_t kCycleNs = rt::DeadlineClock::kPeriodNs;
 constexpr int64_t kRepublishNs = 10'000'000;   // lockstep: repeat a waiting state for late joiners
 constexpr uint64_t kStatusEvery = 100;         // cycles between status messages
+// Cycles between republications of the scenario record (about 16 kB: the scenario and robot files),
+// so that a recording begun after the start (lcm-logger) holds it: once a second of robot time.
+constexpr uint64_t kScenarioEvery = 1000;
 
 // The LCM side of one serve run: publication (and logging), reception into the RobotServer.
 class Bus {
  public:
   Bus(const rt::Scenario& scenario, const ServeOptions& options)
-      : options_(options), channels_(options.channel_prefix), lcm_(checked_lcm_url(options.lcm_url)) {
+      : options_(options),
+        channels_(options.channel_prefix),
+        lcm_(checked_lcm_url(options.lcm_url)),
+        scenario_record_(encode(scenario_message(scenario, options.channel_prefix))) {
     if (!lcm_.good()) throw std::runtime_error("cannot open LCM at `" + options.lcm_url + "`");
     if (!options.log_path.empty()) log_ = std::make_unique<LogWriter>(options.log_path);
-    if (log_) log_->write(channels_.scenario, encode(scenario_message(scenario, options.channel_prefix)), now_utime());
+    publish_scenario();   // the first event of the log
     server_ = std::make_unique<RobotServer>(
         scenario.emulator, channels_, [this](const std::string& channel, const std::vector<uint8_t>& bytes) { publish(channel, bytes); },
         [this](const std::string& line) {
@@ -42,6 +48,7 @@ class Bus {
   }
 
   RobotServer& server() { return *server_; }
+  void publish_scenario() { publish(channels_.scenario, scenario_record_); }
   LogWriter* log() { return log_.get(); }
   const Channels& channels() const { return channels_; }
 
@@ -114,6 +121,7 @@ class Bus {
   const ServeOptions& options_;
   Channels channels_;
   lcm::LCM lcm_;
+  std::vector<uint8_t> scenario_record_;
   std::unique_ptr<LogWriter> log_;
   std::unique_ptr<RobotServer> server_;
   uint64_t state_messages_ = 0;
@@ -148,10 +156,11 @@ status_t status_message(const RobotServer& server, const ServeReport& report, co
   return s;
 }
 
-// Status every kStatusEvery cycles.
+// Status every kStatusEvery cycles, the scenario record every kScenarioEvery.
 void publish_periodic_status(Bus& bus, const ServeReport& report) {
   if (report.cycles % kStatusEvery == 0)
     bus.publish(bus.channels().status, encode(status_message(bus.server(), report, bus.round_trip_us().percentiles())));
+  if (report.cycles % kScenarioEvery == 0) bus.publish_scenario();
 }
 
 // Real time on the DeadlineClock: at each deadline the robot steps with the command received
@@ -234,6 +243,7 @@ ServeReport serve(const rt::Scenario& scenario, const ServeOptions& options) {
   report.wall_seconds = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
   report.last_reflex = server.emulator().reflex_reason();
   bus.publish(bus.channels().status, encode(status_message(server, report, report.round_trip_us)));
+  bus.publish_scenario();
   report.state_messages = bus.state_messages();
   if (bus.log()) {
     bus.log()->flush();

@@ -18,6 +18,7 @@ struct ExportReport {
   uint64_t repeated = 0;    // states published again while the robot waited (same message_id): skipped
   uint64_t rejected = 0;    // events on the state channel that are not a robot_state_t
   std::string damage;       // LogReader::damage_summary(): empty for an intact log
+  std::string missing;      // StateCoverage::missing(): the states a recording misses; empty if none
 };
 
 // Calls `visit(state, command_received)` for every robot state on `state_channel` of an LCM log,

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -88,9 +89,56 @@ class LogReader {
 };
 
 // The scenario as a log records it: the scenario and robot files' texts and the effective seed.
+// `csp serve` publishes it at its start, every second of robot time and at its end, so that a
+// recording begun at any time (lcm-logger started after the server) holds it.
 scenario_t scenario_message(const rt::Scenario& scenario, const std::string& channel_prefix);
 // The scenario back from its record (the files are rebuilt in a temporary folder).
 rt::Scenario scenario_from_message(const scenario_t& message);
+
+// What a log holds, read once: its scenario records, wherever they are (a channel ending in
+// CSP_SCENARIO that decodes as scenario_t; the first of each channel prefix, in the order the
+// prefixes first appear; none when lcm-logger stopped before the server's first republication),
+// and its channels in the order they first appear.
+struct LogOutline {
+  std::vector<scenario_t> scenario_records;
+  std::vector<std::string> channels;
+};
+LogOutline outline(const std::string& log_path);
+
+// The robot a scenario record names, for a reader of robot files (csp gap): a temporary copy of the
+// recorded robot file, removed with this object, and the scenario's end effector.
+class RecordedRobot {
+ public:
+  explicit RecordedRobot(const scenario_t& record);   // throws std::runtime_error if the record does not parse
+  ~RecordedRobot();
+  RecordedRobot(const RecordedRobot&) = delete;
+  RecordedRobot& operator=(const RecordedRobot&) = delete;
+
+  std::string robot_file;      // the temporary copy
+  std::string recorded_path;   // where the robot file was when it was recorded
+  std::string end_effector;    // the scenario's `end_effector` ("none" without one)
+  bool scene_tool = false;     // the scenario's `scene` mounts its tool, which no named end effector is
+};
+
+// Which of a run's robot states a recording holds, from their message ids (the robot's time in ms:
+// one per cycle from 0): the states before its first one, the gaps, and new runs (the ids start
+// again lower: several server runs in one recording).
+class StateCoverage {
+ public:
+  // One recorded state, in log order (republications of the same state already left out).
+  void add(int64_t message_id);
+  uint64_t states() const { return states_; }
+  uint64_t before_first() const { return first_ < 0 ? 0 : static_cast<uint64_t>(first_); }
+  uint64_t missing_in_gaps() const { return missing_; }
+  uint64_t restarts() const { return restarts_; }
+  // What the recording misses, in one clause ("the first 212 states (message ids 0-211); 3 states in
+  // 2 gaps of message ids, the first after id 540"); empty when it holds the run whole.
+  std::string missing() const;
+
+ private:
+  int64_t first_ = -1, last_ = -1, first_gap_after_ = -1;
+  uint64_t states_ = 0, missing_ = 0, gaps_ = 0, restarts_ = 0;
+};
 
 // `csp emulate --lcm-log FILE`: records an in-process run as a CSP log that `csp replay`
 // re-simulates. Construct it after the emulator and before run_motion; call record() from the

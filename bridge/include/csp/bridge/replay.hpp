@@ -11,18 +11,28 @@
 namespace csp::bridge {
 
 struct ResimulationReport {
+  std::string scenario;             // where the scenario came from: the log's record, or --scenario
   uint64_t states = 0;              // recorded states compared
   uint64_t differing_states = 0;    // not bit-identical (utime aside)
   double max_difference = 0.0;      // largest |recorded - re-simulated| over all numeric fields
   std::string first_difference;     // "time 1234 ms: q" for the first differing state
   uint64_t messages = 0;            // commands and requests fed to the emulator
   std::string damage;               // LogReader::damage_summary(): empty for an intact log
+  // What the recording misses (no scenario record, states before its first, gaps in the message
+  // ids; StateCoverage), in one line; empty when it holds the run whole. The states it holds are
+  // compared all the same: a missed state is re-simulated, a missed command shows as a difference.
+  std::string missing;
   // Bit for bit, and over the whole log: a damaged log is never reported identical.
   bool identical() const { return differing_states == 0 && damage.empty(); }
 };
 
-// Throws std::runtime_error if the log cannot be read or has no scenario record (not a CSP log).
-ResimulationReport resimulate(const std::string& log_path);
+// Re-simulates a recording of a CSP session: a `csp serve --log` or `csp emulate --lcm-log` file,
+// or lcm-logger's recording of the bus (other channels and prefixes mixed in, begun late). The
+// scenario is the scenario file `scenario_path` if given, else the log's first CSP_SCENARIO record,
+// wherever it is; the channels are those of that record's prefix, or without a record those of the
+// first state channel (a name ending in CSP_STATE). Throws std::runtime_error if the log cannot be
+// read, has no scenario record and no `scenario_path` is given, or holds no robot state.
+ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path = "");
 
 struct PlaybackOptions {
   double speed = 1.0;       // 1: recorded timing; 2: twice as fast; 0: as fast as possible
