@@ -11,10 +11,12 @@
 
 #include "cli_options.hpp"
 #include "commands.hpp"
+#include "progress.hpp"
 #include "csp/bridge/csv_convert.hpp"
 #include "csp/bridge/lcm_log.hpp"
 #include "csp/gap/idle.hpp"
 #include "csp/gap/report.hpp"
+#include "csp/io/svg_plot.hpp"
 
 namespace csp::cli {
 namespace {
@@ -27,6 +29,7 @@ struct GapArguments {
   double sample_period = gap::FilterOptions{}.sample_period;
   unsigned seed = 1;
   bool keep_idle = false;
+  bool progress = false;
   bool robot_given = false, ee_given = false;   // on the command line (else a session log's recorded ones)
 };
 
@@ -96,11 +99,17 @@ int run_gap(const GapArguments& args, const std::string& command_line) {
   options.filter.sample_period = args.sample_period;
   options.seed = args.seed;
   const JointLog log = read_log(args.log, args, options.filter);
+  ProgressMeter progress("csp gap", args.progress);
+  options.progress = progress.callback();
   const auto start = std::chrono::steady_clock::now();
   const gap::Diagnosis diagnosis = args.heldout.empty()
                                        ? gap::diagnose(model, log, options)
                                        : gap::diagnose(model, log, read_log(args.heldout, args, options.filter), options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::string causes;
+  for (const std::string& cause : diagnosis.causes) causes += (causes.empty() ? "" : ", ") + cause;
+  progress.finish("verdict: " + (causes.empty() ? std::string("no library effect") : causes) +
+                  format("; %.1f %% of the held-out gap unexplained", 100.0 * diagnosis.unexplained_fraction));
   const double idle_share = gap::idle_fraction(diagnosis.heldout.samples);
   if (idle_share > 0.5)
     std::cerr << "csp gap: warning: the arm is at rest in " << std::lround(100.0 * idle_share)
@@ -150,6 +159,7 @@ Command add_gap_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--seed", args->seed, "Seed of the random regressors of the significance test")
       ->capture_default_str();
+  add_progress_flag(*command, args->progress);
   command->add_flag("--keep-idle", args->keep_idle,
                     "Keep the idle stretches (every joint slower than 0.01 rad/s for 0.5 s or more), which are left out by default");
   command->add_option("--json", args->json, "Write the diagnosis as JSON (docs/gap.md: the output contract)");

@@ -5,6 +5,7 @@
 
 #include "cli_options.hpp"
 #include "commands.hpp"
+#include "progress.hpp"
 #include "csp/bridge/csv_convert.hpp"
 
 namespace csp::cli {
@@ -13,6 +14,7 @@ namespace {
 struct LogArguments {
   std::string input, out;
   std::string channel = "CSP_STATE";
+  bool progress = false;
 };
 
 }  // namespace
@@ -28,6 +30,7 @@ Command add_log_command(CLI::App& app) {
   for (CLI::App* sub : {to_csv, from_csv}) {
     sub->add_option("--out", args->out, "Output file")->required();
     sub->add_option("--channel", args->channel, "Channel of the robot states")->capture_default_str();
+    add_progress_flag(*sub, args->progress);
   }
   return [args, to_csv] {
     // Opening the output truncates it: writing over the input would destroy what is being read.
@@ -35,7 +38,9 @@ Command add_log_command(CLI::App& app) {
     if (std::filesystem::equivalent(args->input, args->out, error))
       throw UsageError("--out: `" + args->out + "` is the input file; choose another output file");
     if (to_csv->parsed()) {
-      const bridge::ExportReport r = bridge::export_csv(args->input, args->out, args->channel);
+      ProgressMeter progress("csp log export", args->progress);
+      const bridge::ExportReport r = bridge::export_csv(args->input, args->out, args->channel, progress.callback());
+      progress.finish(std::to_string(r.rows) + " rows");
       std::printf("csp log export: %llu rows to %s (%llu repeated states skipped, %llu undecodable events)\n",
                   static_cast<unsigned long long>(r.rows), args->out.c_str(), static_cast<unsigned long long>(r.repeated),
                   static_cast<unsigned long long>(r.rejected));

@@ -7,6 +7,7 @@
 
 #include "cli_options.hpp"
 #include "commands.hpp"
+#include "progress.hpp"
 #include "csp/bridge/replay.hpp"
 
 namespace csp::cli {
@@ -20,6 +21,7 @@ struct ReplayArguments {
   double speed = 1.0;
   double max_gap = 10.0;
   std::string lcm_url = bridge::kDefaultLcmUrl;
+  bool progress = false;
 };
 
 int run_replay(const ReplayArguments& args) {
@@ -31,7 +33,10 @@ int run_replay(const ReplayArguments& args) {
     options.max_gap = args.max_gap;
     options.lcm_url = args.lcm_url;
     options.stop = &interrupted;
+    ProgressMeter progress("csp replay", args.progress);
+    options.progress = progress.callback();
     const bridge::PlaybackReport r = bridge::play_back(args.log, options);
+    progress.finish(std::to_string(r.published) + " events published");
     std::printf("csp replay: published %llu events of %s on %s\n", static_cast<unsigned long long>(r.published), args.log.c_str(),
                 args.lcm_url.c_str());
     if (r.timestamp_jumps > 0)
@@ -41,7 +46,10 @@ int run_replay(const ReplayArguments& args) {
     std::fprintf(stderr, "csp replay: %s\n", r.damage.c_str());
     return 1;
   }
-  const bridge::ResimulationReport r = bridge::resimulate(args.log, args.scenario);
+  ProgressMeter progress("csp replay", args.progress);
+  const bridge::ResimulationReport r = bridge::resimulate(args.log, args.scenario, progress.callback());
+  progress.finish(std::to_string(r.states) + " states re-simulated: " +
+                  (r.identical() ? "identical, bit for bit" : std::to_string(r.differing_states) + " differ"));
   std::printf("csp replay: %s: re-simulated %llu states from %llu recorded commands and requests\n  scenario: %s\n",
               args.log.c_str(), static_cast<unsigned long long>(r.states), static_cast<unsigned long long>(r.messages),
               r.scenario.c_str());
@@ -72,6 +80,7 @@ Command add_replay_command(CLI::App& app) {
   cmd->add_option("--max-gap", args->max_gap, "--play: seconds of log time beyond which a timestamp jump is not waited for")
       ->capture_default_str();
   cmd->add_option("--lcm-url", args->lcm_url, "--play: LCM provider URL")->capture_default_str();
+  add_progress_flag(*cmd, args->progress);
   return [args] { return run_replay(*args); };
 }
 

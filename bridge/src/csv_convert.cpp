@@ -11,12 +11,14 @@
 namespace csp::bridge {
 
 ExportReport for_each_logged_state(const std::string& log_path, const std::string& state_channel,
-                                   const std::function<void(const rt::RobotState&, bool command_received)>& visit) {
+                                   const std::function<void(const rt::RobotState&, bool command_received)>& visit,
+                                   const Progress& progress) {
   LogReader log(log_path);
   ExportReport report;
   StateCoverage coverage;
   std::optional<robot_state_t> last;
   for (const LogEvent* event = log.next(); event; event = log.next()) {
+    if (log.events() % 4096 == 0) csp::report(progress, "reading the log (MB)", 1e-6 * log.offset(), 1e-6 * log.size());
     if (event->channel != state_channel) continue;
     robot_state_t m;
     if (decode_exact(event->data, event->datalen, m) != Rejection::kNone) {
@@ -47,21 +49,25 @@ bool is_lcm_log(const std::string& path) {
   return in.gcount() == 4 && magic[0] == 0xED && magic[1] == 0xA1 && magic[2] == 0xDA && magic[3] == 0x01;
 }
 
-ExportReport export_csv(const std::string& log_path, const std::string& csv_path, const std::string& state_channel) {
+ExportReport export_csv(const std::string& log_path, const std::string& csv_path, const std::string& state_channel,
+                        const Progress& progress) {
   rt::CsvLog csv(csv_path);
-  return for_each_logged_state(log_path, state_channel, [&](const rt::RobotState& state, bool command_received) {
-    rt::CycleInfo cycle;
-    cycle.command_received = command_received;
-    csv.write(state, cycle);
-  });
+  return for_each_logged_state(
+      log_path, state_channel,
+      [&](const rt::RobotState& state, bool command_received) {
+        rt::CycleInfo cycle;
+        cycle.command_received = command_received;
+        csv.write(state, cycle);
+      },
+      progress);
 }
 
-JointLog read_joint_log_lcm(const std::string& log_path, const std::string& state_channel) {
+JointLog read_joint_log_lcm(const std::string& log_path, const std::string& state_channel, const Progress& progress) {
   JointLog log;
   log.source = log_path;
-  const ExportReport read = for_each_logged_state(log_path, state_channel, [&](const rt::RobotState& state, bool command_received) {
-    rt::append_state(log, state, command_received);
-  });
+  const ExportReport read = for_each_logged_state(
+      log_path, state_channel,
+      [&](const rt::RobotState& state, bool command_received) { rt::append_state(log, state, command_received); }, progress);
   if (!read.damage.empty())
     throw JointLogError(read.damage + "; `csp log export` writes the readable part as CSV if that is what you want to diagnose");
   if (log.size() < 2)

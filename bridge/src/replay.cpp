@@ -42,7 +42,7 @@ std::string damage_of(const std::string& log_path) {
 
 }  // namespace
 
-ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path) {
+ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path, const Progress& progress) {
   ResimulationReport report;
   std::vector<std::string> missing;
   const LogOutline contents = outline(log_path);
@@ -95,6 +95,7 @@ ResimulationReport resimulate(const std::string& log_path, const std::string& sc
     while (server.message_id() < message_id) server.step(event.timestamp);
   };
   for (const LogEvent* event = log.next(); event; event = log.next()) {
+    if (log.events() % 1024 == 0) csp::report(progress, "re-simulating (MB of the log)", 1e-6 * log.offset(), 1e-6 * log.size());
     config_request_t request;
     config_reply_t reply;
     if (event->channel == channels.config && requests_wait_for_replies &&
@@ -160,6 +161,7 @@ PlaybackReport play_back(const std::string& log_path, const PlaybackOptions& opt
   clock_gettime(CLOCK_MONOTONIC, &start);
   for (const LogEvent* event = log.next(); event; event = log.next()) {
     if (options.stop && options.stop->load()) break;
+    if (log.events() % 256 == 0) csp::report(options.progress, "publishing (MB of the log)", 1e-6 * log.offset(), 1e-6 * log.size());
     if (report.published > 0 && options.speed > 0.0) {
       const double gap_s = (static_cast<double>(event->timestamp) - static_cast<double>(previous_timestamp)) * 1e-6;
       if (gap_s < 0.0 || gap_s > options.max_gap) ++report.timestamp_jumps;

@@ -8,6 +8,7 @@
 #include <functional>
 #include <string>
 
+#include "csp/dynamics/progress.hpp"
 #include "csp/io/joint_log.hpp"
 #include "csp/rt/robot_state.hpp"
 
@@ -23,21 +24,24 @@ struct ExportReport {
 
 // Calls `visit(state, command_received)` for every robot state on `state_channel` of an LCM log,
 // in order, once each: a state published again unchanged (same message_id; utime aside) is
-// skipped, an event that does not decode as robot_state_t counted as rejected.
+// skipped, an event that does not decode as robot_state_t counted as rejected. `progress`: MB of
+// the log read.
 ExportReport for_each_logged_state(const std::string& log_path, const std::string& state_channel,
-                                   const std::function<void(const rt::RobotState&, bool command_received)>& visit);
+                                   const std::function<void(const rt::RobotState&, bool command_received)>& visit,
+                                   const Progress& progress = {});
 
 // True if `path` is a regular file that starts with an LCM log event's magic number (0xEDA1DA01),
 // whatever its name.
 bool is_lcm_log(const std::string& path);
 
 // Writes every state on `state_channel` (default CSP_STATE) as one CSV row (rt::CsvLog).
-ExportReport export_csv(const std::string& log_path, const std::string& csv_path, const std::string& state_channel);
+ExportReport export_csv(const std::string& log_path, const std::string& csv_path, const std::string& state_channel,
+                        const Progress& progress = {});
 
 // The states on `state_channel` as a joint log, checked as a CSV joint log is (check_joint_log);
 // throws JointLogError naming the file when the channel holds fewer than 2 states or the log is
 // damaged (a diagnosis must not run on a log with holes it does not know of).
-JointLog read_joint_log_lcm(const std::string& log_path, const std::string& state_channel);
+JointLog read_joint_log_lcm(const std::string& log_path, const std::string& state_channel, const Progress& progress = {});
 
 // Reads a CSV joint log (read_joint_log_csv) and writes one robot_state_t per row on
 // `state_channel`, with the optional groups the log has (rt::state_from_row): time is t in whole

@@ -70,6 +70,8 @@ class LogReader {
   const LogEvent* next();
   const std::string& path() const { return path_; }
   uint64_t events() const { return events_; }
+  uint64_t offset() const { return offset_; }   // bytes read so far, of size(): for progress
+  uint64_t size() const { return size_; }
   const std::vector<LogDamage>& damage() const { return damage_; }
   // One line naming every damaged stretch and the bytes skipped; empty for an intact log.
   std::string damage_summary() const;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "csp/bridge/messages.hpp"
+#include "csp/dynamics/progress.hpp"
 
 namespace csp::bridge {
 
@@ -32,13 +33,16 @@ struct ResimulationReport {
 // wherever it is; the channels are those of that record's prefix, or without a record those of the
 // first state channel (a name ending in CSP_STATE). Throws std::runtime_error if the log cannot be
 // read, has no scenario record and no `scenario_path` is given, or holds no robot state.
-ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path = "");
+// `progress`: MB of the log re-simulated.
+ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path = "",
+                              const Progress& progress = {});
 
 struct PlaybackOptions {
   double speed = 1.0;       // 1: recorded timing; 2: twice as fast; 0: as fast as possible
   double max_gap = 10.0;    // [s] of log time: a timestamp jump beyond it (or backwards) is not waited for
   std::string lcm_url = kDefaultLcmUrl;
   const std::atomic<bool>* stop = nullptr;
+  Progress progress;        // MB of the log published
 };
 // The speeds play_back accepts besides 0: slower would wait for years, faster is "as fast as possible".
 inline constexpr double kMinPlaybackSpeed = 1e-3, kMaxPlaybackSpeed = 1e6;
