@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include "csp/io/svg_plot.hpp"
 #include "csp/planners/checker.hpp"
 #include "csp/planners/fourier.hpp"
 #include "csp/planners/plan_files.hpp"
@@ -368,6 +369,23 @@ TEST(PlanCommand, CheckReportsAFailingTrajectoryWithExitOneAndWritesTheReport) {
   for (const char* figure : {"limits.svg", "clearance.svg", "tool_path.svg"})
     EXPECT_NE(read_text(out + "/" + figure).find("<svg"), std::string::npos) << figure;
   EXPECT_NE(read_text(out + "/report.md").find("velocity of joint 7"), std::string::npos);
+  // The verdict on stderr in one line, from the same report: FAILED with the failure's kind, joint,
+  // time, value and limit (the JSON stays on stdout).
+  const nlohmann::json& failure = report["check"]["failures"][0];
+  EXPECT_EQ(run.err.rfind(format("csp plan check: FAILED: velocity joint 7 at t = %.3f s (%g, limit %g) rad/s (",
+                                 failure["t"].get<double>(), failure["value"].get<double>(), failure["limit"].get<double>()),
+                          0),
+            0u)
+      << run.err;
+  EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+
+  // A trajectory within every limit: PASSED, exit 0.
+  const std::string slow = (temp_dir() / "slow.csv").string();
+  write_joint_log_csv(slow, joint_move(scene.pose("ready").q, 6, -0.2, 0.5, 1.5, 2.5));
+  const ProgramRun passed = run_csp({"plan", "check", slow, "--scene", "ultrasound_abdomen"});
+  EXPECT_EQ(passed.exit_code, 0) << passed.err;
+  EXPECT_TRUE(nlohmann::json::parse(passed.out)["passed"]);
+  EXPECT_EQ(passed.err.rfind("csp plan check: PASSED (", 0), 0u) << passed.err;
 }
 
 // ---------------- Trajectory files in scenarios ----------------
