@@ -23,6 +23,7 @@ class FixedArm : public Arm {
     state.joints[0].tau_J_d = command.joints[0].target_torque;
     return state;
   }
+  ArmState measured() const override { return state; }
 };
 
 // A master on the in-memory bus: NMT start, the 402 walk, then one CST cycle per call.

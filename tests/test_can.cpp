@@ -33,6 +33,7 @@ class TestArm : public Arm {
     if (command.error_recovery) state.errors = rt::ErrorSet{};
     return state;
   }
+  ArmState measured() const override { return state; }
 };
 
 class CanBus : public ::testing::Test {

@@ -5,27 +5,6 @@
 #include <vector>
 
 namespace csp::gap {
-namespace {
-
-// Appends the rows of `part` (a slice of the same log) to `log`, their time moved back by `shift`.
-void append(JointLog& log, const JointLog& part, double shift) {
-  const std::size_t first = log.size();
-  for (const ColumnGroup& group : kJointLogSchema)
-    std::visit(
-        [&](auto member) {
-          const auto& in = part.*member;
-          if (in.size() == part.size()) (log.*member).insert((log.*member).end(), in.begin(), in.end());
-        },
-        group.member);
-  for (std::size_t k = first; k < log.size(); ++k) log.t[k] -= shift;
-  for (std::size_t i = 0; i < part.extensions.size(); ++i) {
-    if (log.extensions.size() <= i) log.extensions.push_back({part.extensions[i].name, {}});
-    std::vector<double>& values = log.extensions[i].values;
-    values.insert(values.end(), part.extensions[i].values.begin(), part.extensions[i].values.end());
-  }
-}
-
-}  // namespace
 
 bool at_rest(const Vector7& dq, const IdleOptions& options) { return dq.cwiseAbs().maxCoeff() < options.velocity; }
 
@@ -74,7 +53,7 @@ IdleTrim leave_out_idle(const JointLog& log, const FilterOptions& filter, const 
   for (std::size_t i = 0; i < kept.size(); ++i) {
     const auto [begin, end] = kept[i];
     if (i > 0) shift += log.t[begin - 1] - log.t[kept[i - 1].second - 1];
-    append(trim.log, slice(log, log.t[begin], end < n ? log.t[end] : log.t.back() + 1.0), shift);
+    append_rows(trim.log, slice(log, log.t[begin], end < n ? log.t[end] : log.t.back() + 1.0), shift);
   }
   trim.seconds_left_out = (log.t.back() - log.t.front()) - (trim.log.t.back() - trim.log.t.front());
   return trim;

@@ -387,4 +387,21 @@ JointLog slice(const JointLog& log, double t_begin, double t_end) {
   return part;
 }
 
+void append_rows(JointLog& log, const JointLog& part, double time_shift) {
+  const std::size_t first = log.size();
+  for (const ColumnGroup& group : kJointLogSchema)
+    std::visit(
+        [&](auto member) {
+          const auto& in = part.*member;
+          if (in.size() == part.size()) (log.*member).insert((log.*member).end(), in.begin(), in.end());
+        },
+        group.member);
+  for (std::size_t k = first; k < log.size(); ++k) log.t[k] -= time_shift;
+  for (std::size_t i = 0; i < part.extensions.size(); ++i) {
+    if (log.extensions.size() <= i) log.extensions.push_back({part.extensions[i].name, {}});
+    std::vector<double>& values = log.extensions[i].values;
+    values.insert(values.end(), part.extensions[i].values.begin(), part.extensions[i].values.end());
+  }
+}
+
 }  // namespace csp

@@ -39,8 +39,7 @@ class Arm {
   virtual ArmState cycle(const ArmCommand& command) = 0;
   // The state before the first cycle: what the drives report before the first SYNC (an SDO read
   // of 0x6064, the first TPDOs), so that a master reading its start pose early gets the true one.
-  // The default, all zeros, is for stand-in arms without a robot.
-  virtual ArmState measured() const { return {}; }
+  virtual ArmState measured() const = 0;
 };
 
 struct BusSettings {

@@ -154,4 +154,8 @@ void check_joint_log(const JointLog& log);
 // The rows with t in [t_begin, t_end), every group and extension.
 JointLog slice(const JointLog& log, double t_begin, double t_end);
 
+// Appends the rows of `part` (with the same groups and extensions as `log`, e.g. a slice of the
+// same log) to `log`, their time moved back by `time_shift`.
+void append_rows(JointLog& log, const JointLog& part, double time_shift);
+
 }  // namespace csp
