@@ -40,16 +40,8 @@ int main(int argc, char** argv) {
     Command run = adder(app);
     commands.emplace_back(app.get_subcommands({}).back(), std::move(run));
   };
-  add(add_model_command);
-  add(add_workspace_command);
-  add(add_demo_command);
-  add(add_emulate_command);
-  add(add_serve_command);
-  add(add_replay_command);
-  add(add_log_command);
-  add(add_gap_command);
-  add(add_can_command);
-  add(add_plan_command);
+  // One add(add_<name>_command); per command this build has (apps/CMakeLists.txt, CSP_COMMANDS).
+#include "command_registrations.inc"
 
   // CLI11 would report an unknown command as a missing one; name it instead.
   std::string known;
@@ -60,6 +52,9 @@ int main(int argc, char** argv) {
   }
   if (argc > 1 && argv[1][0] != '-' && !is_known) {
     std::cerr << "csp: unknown command `" << argv[1] << "` (commands: " << known << ")\n";
+    if (std::string(CSP_MISSING_COMMANDS).size() > 0)
+      std::cerr << "csp: not built in: " CSP_MISSING_COMMANDS " (CSP_COMMANDS; every command: "
+                   "cmake -B build -U CSP_COMMANDS && cmake --build build --target csp)\n";
     return 2;
   }
 
