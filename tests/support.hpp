@@ -20,6 +20,15 @@
 
 namespace csp::test {
 
+// Under the sanitizers (about 10x slower) the costliest sweeps run fewer cases: every code path still
+// runs there, and the Release build runs every case.
+#if defined(CSP_SANITIZE_BUILD)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+constexpr int fewer_when_sanitized(int all, int sanitized) { return kSanitized ? sanitized : all; }
+
 inline std::string robot_file(const std::string& name) {
   return std::string(CSP_SOURCE_DIR) + "/configs/robots/" + name + ".yaml";
 }
