@@ -553,8 +553,10 @@ TEST(MotionCheck, NeverCertifiesAMotionThatDenseResamplingFindsInCollision) {
   const Scene base = load_scene(scene_file("ultrasound_abdomen"));
   const Model model = scene_model("panda", base);
   int certified = 0, refused = 0, refused_colliding = 0;
-  const int scenes = fewer_when_sanitized(10, 5);   // scenes 4, 6 and 7 refuse a motion that collides
-  for (int scene_index = 0; scene_index < scenes; ++scene_index) {
+  // Under the sanitizers the first five scenes, and more (up to all ten) until one refuses a motion
+  // that collides (in Release scenes 4, 6 and 7 do; the sanitized build's SSE2 rounding may differ).
+  const int scenes = fewer_when_sanitized(10, 5);
+  for (int scene_index = 0; scene_index < 10 && (scene_index < scenes || refused_colliding == 0); ++scene_index) {
     RandomShapes shapes(51 + 2 * static_cast<unsigned>(scene_index));   // each scene its own draws
     RandomStates random(52 + 2 * static_cast<unsigned>(scene_index));
     Scene scene = base;
