@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
   }
   if (argc > 1 && argv[1][0] != '-' && !is_known) {
     std::cerr << "csp: unknown command `" << argv[1] << "` (commands: " << known << ")\n";
-    if (std::string(CSP_MISSING_COMMANDS).size() > 0)
+    if (CSP_MISSING_COMMANDS[0] != '\0')
       std::cerr << "csp: not built in: " CSP_MISSING_COMMANDS " (CSP_COMMANDS; every command: "
                    "cmake -B build -U CSP_COMMANDS && cmake --build build --target csp)\n";
     return 2;
