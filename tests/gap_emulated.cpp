@@ -117,7 +117,7 @@ JointLog generate_emulated_log(const Model& model, const gap::InjectedEffects& t
     const double since = t[k] - kRampIn;  // the log's time: the drift begins with it
     log.t.push_back(since);
     log.q.push_back(q[k] + noise(options.position_noise));
-    log.dq.push_back(dq[k] + noise(options.velocity_noise));
+    log.dq.push_back(dq[k] + gap::velocity_sensor_error(truth, since) + noise(options.velocity_noise));
     const Vector7 reading = interpolate(tau_J, (t[k] - truth.delay - t.front()) / rt::kDeltaT);
     log.tau_J.push_back(reading + truth.sensor_gain.cwiseProduct(reading) + truth.drift_rate * since);
   }

@@ -152,8 +152,39 @@ nlohmann::json describe_set(const EffectSet& set, const SetFit& fit) {
   return params;
 }
 
-double explained(const VectorXd& before, const VectorXd& after) {
-  return 1.0 - after.squaredNorm() / std::max(before.squaredNorm(), std::numeric_limits<double>::min());
+// A stacked held-out residual within the excitation band, below kBandEdges.back() (5 Hz): every
+// effect of the library is a torque of the motion and acts there, so effects are judged there. Above
+// it a residual is the noise of the model's inputs (a velocity sensor's ripple differentiated into
+// ddq, which an armature would otherwise "explain") and vibrations no library effect has: the
+// localisation's (docs/gap.md, "Judged in the excitation band").
+VectorXd excitation_band(const VectorXd& stacked, double sample_period) {
+  const Eigen::Index n = stacked.size() / kNumJoints;
+  VectorXd out(stacked.size());
+  Eigen::FFT<double> fft;
+  std::vector<double> series(static_cast<std::size_t>(n));
+  std::vector<std::complex<double>> spectrum;
+  const auto cut = static_cast<Eigen::Index>(std::floor(kBandEdges.back() * static_cast<double>(n) * sample_period));
+  for (int j = 0; j < kNumJoints; ++j) {
+    for (Eigen::Index k = 0; k < n; ++k) series[static_cast<std::size_t>(k)] = stacked[kNumJoints * k + j];
+    fft.fwd(spectrum, series);
+    for (Eigen::Index k = cut + 1; k < n - cut; ++k) spectrum[static_cast<std::size_t>(k)] = 0.0;
+    fft.inv(series, spectrum);
+    for (Eigen::Index k = 0; k < n; ++k) out[kNumJoints * k + j] = series[static_cast<std::size_t>(k)];
+  }
+  return out;
+}
+
+// The fraction of the whole mean square of `before` that `after` removes within the excitation band
+// (the fraction keeps its scale: min_explained and the null threshold mean what they did).
+double explained_in_band(const VectorXd& before, const VectorXd& after, double period) {
+  return (excitation_band(before, period).squaredNorm() - excitation_band(after, period).squaredNorm()) /
+         std::max(before.squaredNorm(), std::numeric_limits<double>::min());
+}
+
+// The period of a part's samples (nominal: a subset's gaps are ignored).
+double sample_period(const Part& part) {
+  const Samples& s = part.samples;
+  return (s.t.back() - s.t.front()) / static_cast<double>(s.size() - 1);
 }
 
 // Random regressors: each column lives on one random joint and is a random combination of five
@@ -161,7 +192,8 @@ double explained(const VectorXd& before, const VectorXd& after) {
 // and random phases. The bank is evaluated once on both parts.
 class RandomRegressors {
  public:
-  RandomRegressors(const Part& train, const Part& heldout, unsigned seed) : seed_(seed) {
+  RandomRegressors(const Part& train, const Part& heldout, unsigned seed)
+      : seed_(seed), heldout_period_(sample_period(heldout)) {
     std::mt19937_64 engine(seed);
     std::uniform_real_distribution<double> frequency(0.05, 2.0), phase(0.0, 2.0 * M_PI);
     for (const Part* part : {&train, &heldout}) bank_.emplace_back(part->samples.size(), kBankSize);
@@ -177,7 +209,11 @@ class RandomRegressors {
 
   // Held-out fraction of mean square removed by `size` random columns fitted by least squares to
   // the training residual, best of `draws`.
-  double best_improvement(int size, int draws, const VectorXd& train_left, const VectorXd& heldout_left) const {
+  // Judged in the excitation band (the random columns are within it already), as a fraction of the
+  // whole held-out mean square.
+  double best_improvement(int size, int draws, const VectorXd& train_left, const VectorXd& heldout_all) const {
+    const VectorXd heldout_left = excitation_band(heldout_all, heldout_period_);
+    const double whole = std::max(heldout_all.squaredNorm(), std::numeric_limits<double>::min());
     double best = -std::numeric_limits<double>::infinity();
     for (int draw = 0; draw < draws; ++draw) {
       std::mt19937_64 engine(seed_ * 1000003ULL + static_cast<unsigned>(size) * 1009ULL + static_cast<unsigned>(draw));
@@ -205,7 +241,7 @@ class RandomRegressors {
       for (int c = 0; c < size; ++c)
         for (Eigen::Index k = 0; k < columns[1].rows(); ++k)
           predicted[kNumJoints * k + joints[static_cast<std::size_t>(c)]] += x[c] * columns[1](k, c);
-      best = std::max(best, explained(heldout_left, heldout_left - predicted));
+      best = std::max(best, (heldout_left.squaredNorm() - (heldout_left - predicted).squaredNorm()) / whole);
     }
     return best;
   }
@@ -217,22 +253,27 @@ class RandomRegressors {
                                                                          stacked.size() / kNumJoints);
   }
   unsigned seed_;
+  double heldout_period_;
   std::vector<MatrixXd> bank_;  // samples x kBankSize, per part
 };
 
 // `null_threshold`: what random regressors of the last effect's size buy from the same residuals.
-EffectResult make_result(const std::string& name, const EffectSet& set, const SetFit& fit,
-                         const VectorXd& heldout_before, double null_threshold, const DiagnosisOptions& options) {
+// Judged in the excitation band; the RMS after and the joints it helps are the whole residual's.
+EffectResult make_result(const std::string& name, const EffectSet& set, const SetFit& fit, const Part& heldout,
+                         const VectorXd& heldout_all, double null_threshold, const DiagnosisOptions& options) {
   EffectResult result;
   result.name = name;
   result.parameter_count = set_size(set);
   result.train_rms_after = rms(fit.train_left);
   result.heldout_rms_after = rms(fit.heldout_left);
-  const double improvement = explained(heldout_before, fit.heldout_left);
-  result.explained_fraction = std::clamp(improvement, 0.0, 1.0);
+  const double improvement = explained_in_band(heldout_all, fit.heldout_left, sample_period(heldout));
+  result.explained_fraction = std::clamp(
+      1.0 - fit.heldout_left.squaredNorm() / std::max(heldout_all.squaredNorm(), std::numeric_limits<double>::min()),
+      0.0, 1.0);
+  result.judged_fraction = std::clamp(improvement, 0.0, 1.0);
   result.null_threshold = null_threshold;
   result.significant = improvement > result.null_threshold && improvement >= options.min_explained;
-  const Vector7 ms_before = joint_mean_square(heldout_before), ms_after = joint_mean_square(fit.heldout_left);
+  const Vector7 ms_before = joint_mean_square(heldout_all), ms_after = joint_mean_square(fit.heldout_left);
   for (int j = 0; j < kNumJoints; ++j)
     if (ms_after[j] <= 0.9 * ms_before[j]) result.joints.push_back(j + 1);
   return result;
@@ -394,17 +435,17 @@ std::pair<EffectSet, SetFit> forward_selection(const std::vector<std::unique_ptr
       VectorXd start(set_size(set));
       start << current.theta, effect->initial_guess(train, current.train_left);
       SetFit fit = fit_set(set, train, heldout, start);
-      EffectResult result = make_result(effect->name(), set, fit, current.heldout_left,
+      EffectResult result = make_result(effect->name(), set, fit, heldout, current.heldout_left,
                                         threshold(effect->size(), current.train_left, current.heldout_left), options);
       if (result.significant) passing.emplace_back(effect.get(), std::move(result), std::move(fit));
     }
     if (passing.empty()) break;
     double top = 0.0;
-    for (const auto& [effect, result, fit] : passing) top = std::max(top, result.explained_fraction);
+    for (const auto& [effect, result, fit] : passing) top = std::max(top, result.judged_fraction);
     for (auto& [effect, result, fit] : passing) {
-      if (result.explained_fraction < (1.0 - options.parsimony_margin) * top) continue;
+      if (result.judged_fraction < (1.0 - options.parsimony_margin) * top) continue;
       if (best && (effect->size() > best->size() ||
-                   (effect->size() == best->size() && result.explained_fraction <= best_result.explained_fraction)))
+                   (effect->size() == best->size() && result.judged_fraction <= best_result.judged_fraction)))
         continue;
       best = effect, best_result = result, best_fit = fit;
     }
@@ -433,7 +474,7 @@ void backward_check(EffectSet& selected, SetFit& current, const Part& train, con
     EffectSet others;
     const VectorXd start = without_effect(set, with.theta, effect, others);
     const SetFit without = fit_set(others, fit_on, judge_on, start);
-    improvement = explained(without.heldout_left, with.heldout_left);
+    improvement = explained_in_band(without.heldout_left, with.heldout_left, sample_period(judge_on));
     return improvement > null.best_improvement(effect->size(), options.null_draws, without.train_left,
                                                without.heldout_left) &&
            improvement >= options.min_explained;
@@ -460,6 +501,75 @@ void backward_check(EffectSet& selected, SetFit& current, const Part& train, con
       dropped = true;
     }
   }
+}
+
+// The held-out mean square left, split (Diagnosis::unexplained_noise and the next two): `left` is
+// the residual the localisation saw (the steady samples); the split is of its mean square, scaled
+// to the unexplained fraction.
+void split_unexplained(Diagnosis& d, const VectorXd& left) {
+  const double n = static_cast<double>(left.size() / kNumJoints), total = std::max(left.squaredNorm(), 1e-300);
+  double noise = 0.0, model_input = 0.0;
+  for (const NoiseFloor& floor : d.noise_floor)
+    noise += n * floor.measured_rms * floor.measured_rms, model_input += n * floor.model_input_rms * floor.model_input_rms;
+  for (const UnexplainedStructure& u : d.unexplained)
+    if (u.side == kModelInput) model_input += n * u.size * u.size;
+  d.unexplained_noise = d.unexplained_fraction * std::min(1.0, noise / total);
+  d.unexplained_model_input = d.unexplained_fraction * std::min(1.0 - noise / total, model_input / total);
+  d.unexplained_rest = std::max(0.0, d.unexplained_fraction - d.unexplained_noise - d.unexplained_model_input);
+}
+
+// A parameter of `params` as a number (a null, an unidentified sigma, as `otherwise`).
+double number(const nlohmann::json& params, const char* key, std::size_t j, double otherwise = 0.0) {
+  const nlohmann::json& value = params.at(key).at(j);
+  return value.is_number() ? value.get<double>() : otherwise;
+}
+
+// The verdict's fits that are not physical. Inertial parameters: a mass matrix that is not positive
+// definite, or no set of physical links that realises the fitted base parameters. Friction (the
+// model's own plus the fitted correction): a viscous coefficient below zero by more than two sigma,
+// or a law that drives the motion (torque against the velocity's sign by more than 0.05 N m)
+// somewhere within the log's velocities.
+std::vector<std::string> physical_warnings(const Model& model, const Diagnosis& d) {
+  std::vector<std::string> warnings;
+  const nlohmann::json& params = d.verdict_params;
+  if (params.contains("inertial_parameters")) {
+    const nlohmann::json& inertial = params.at("inertial_parameters");
+    if (!inertial.at("mass_matrix_positive_definite").get<bool>())
+      warnings.push_back("inertial_parameters: the fitted base parameters give a mass matrix that is not positive "
+                         "definite: not a physical arm; read the fit as a correction along this log's motion only");
+    else if (!inertial.at("realisation_physically_consistent").get<bool>())
+      warnings.push_back("inertial_parameters: no set of physical links realises the fitted base parameters (the "
+                         "smallest change of the standard ones has a link with a non-positive mass or inertia); the "
+                         "mass matrix stays positive definite");
+  }
+  if (params.contains("joint_friction")) {
+    const nlohmann::json& friction = params.at("joint_friction");
+    const FrictionModel& own = model.parameters().friction;
+    for (std::size_t j = 0; j < kNumJoints; ++j) {
+      const int joint = static_cast<int>(j);
+      const double phi1 = number(friction, "phi1_Nm", j), phi2 = number(friction, "phi2_s_per_rad", j),
+                   phi3 = number(friction, "phi3_rad_per_s", j), viscous = number(friction, "viscous_Nms_per_rad", j);
+      const double viscous_total = viscous + (own.type == FrictionModel::Type::kLinear ? own.viscous[joint] : 0.0);
+      if (viscous_total + 2.0 * number(friction, "viscous_Nms_per_rad_sigma", j) < 0.0)
+        warnings.push_back(format("joint_friction: joint %d's viscous friction is negative (%.3f N m s/rad with the "
+                                  "model's own): not physical", joint + 1, viscous_total));
+      double fastest = 0.0;
+      for (const Part* part : {&d.train, &d.heldout})
+        for (const Vector7& dq : part->samples.dq) fastest = std::max(fastest, std::abs(dq[joint]));
+      for (int g = -20; g <= 20; ++g) {
+        const double dq = fastest * g / 20.0;
+        if (std::abs(dq) < 0.05) continue;
+        const double total = friction_law(phi1, phi2, phi3, viscous, dq) +
+                             friction_torque(own, dq * Vector7::Unit(joint))[joint];
+        if (total * (dq > 0.0 ? 1.0 : -1.0) < -0.05) {
+          warnings.push_back(format("joint_friction: joint %d's friction drives the motion at %.2f rad/s (%.3f N m "
+                                    "with the model's own): not dissipative, not physical", joint + 1, dq, total));
+          break;
+        }
+      }
+    }
+  }
+  return warnings;
 }
 
 }  // namespace
@@ -493,12 +603,12 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
            static_cast<double>(library.size()));
     const EffectSet set = {effect.get()};
     const SetFit fit = fit_set(set, train, heldout, effect->initial_guess(train, train.residual));
-    d.effects.push_back(make_result(effect->name(), set, fit, heldout.residual,
+    d.effects.push_back(make_result(effect->name(), set, fit, heldout, heldout.residual,
                                     threshold(effect->size(), train.residual, heldout.residual), options));
     d.effects.back().params = describe_set(set, fit);
   }
   std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
-    return a.explained_fraction > b.explained_fraction;
+    return a.judged_fraction > b.judged_fraction;
   });
 
   auto [selected, current] = forward_selection(library, train, heldout, random, options, d);
@@ -530,24 +640,28 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   d.verdict_params = selected.empty() ? nlohmann::json::object() : describe_set(selected, current);
   d.verdict_heldout_torque = heldout.residual - current.heldout_left;
   // What is left, localised on the held-out part's steady samples, and the transients of both parts.
+  // Localised is what the causes cannot explain with any parameters: the residual after the causes
+  // refitted on the held-out part itself. The causes fitted on the training part leave a little more
+  // (their parameters carry over imperfectly: the unexplained fraction says how much), which is no
+  // unmodelled effect to look for.
   report(options.progress, "localising what is left", 0, 0);
-  if (d.transients.empty()) {
-    d.unexplained = localise_unexplained(heldout, current.heldout_left, d.causes);
-  } else {
-    std::vector<Eigen::Index> rows;
-    for (std::size_t k = 0; k < steady[1].size(); ++k)
-      if (steady[1][k])
-        for (int j = 0; j < kNumJoints; ++j) rows.push_back(kNumJoints * static_cast<Eigen::Index>(k) + j);
-    d.unexplained = localise_unexplained(selection_heldout, current.heldout_left(rows), d.causes);
+  const VectorXd left = fit_set(selected, selection_heldout, selection_train, theta).train_left;
+  Localisation localised = localise_unexplained(selection_heldout, left, d.causes);
+  d.unexplained = std::move(localised.structures);
+  d.noise_floor = localised.floor;
+  split_unexplained(d, left);
+  for (const Transient& t : d.transients) {
+    const double floor = d.noise_floor[static_cast<std::size_t>(t.joint - 1)].rms;
+    UnexplainedStructure u{t.joint, "transient", t.size, t.share, t.start, floor > 0.0 ? t.size / floor : 0.0,
+                           0.0,     0.0,         kMeasuredTorque, ""};
+    u.detail = format("joint %d: a transient of %.3f N m at %.2f-%.2f s in the %s part (%.0f %% of what is left on it "
+                      "there); no library effect (a push, a contact?); the selection left it out",
+                      t.joint, t.size, t.start, t.end, t.heldout ? "held-out" : "training", 100.0 * t.share);
+    d.unexplained.push_back(u);
   }
-  for (const Transient& t : d.transients)
-    d.unexplained.push_back(
-        {t.joint, "transient", t.size, t.share, t.start,
-         format("joint %d: a transient of %.3f N m at %.2f-%.2f s in the %s part (%.0f %% of what is left on it "
-                "there); no library effect (a push, a contact?); the selection left it out",
-                t.joint, t.size, t.start, t.end, t.heldout ? "held-out" : "training", 100.0 * t.share)});
   std::stable_sort(d.unexplained.begin(), d.unexplained.end(),
                    [](const auto& a, const auto& b) { return a.size > b.size; });
+  d.warnings = physical_warnings(model, d);
   return d;
 }
 
@@ -568,6 +682,7 @@ nlohmann::json to_json(const Diagnosis& d) {
                           {"train_rms_after", vec(e.train_rms_after)},
                           {"heldout_rms_after", vec(e.heldout_rms_after)},
                           {"explained_fraction", e.explained_fraction},
+                          {"judged_fraction", e.judged_fraction},
                           {"null_threshold", e.null_threshold},
                           {"significant", e.significant}};
   };
@@ -579,6 +694,7 @@ nlohmann::json to_json(const Diagnosis& d) {
   for (const auto& s : d.steps)
     steps.push_back({{"added", s.name},
                      {"explained_fraction_of_remaining", s.explained_fraction},
+                     {"judged_fraction_of_remaining", s.judged_fraction},
                      {"null_threshold", s.null_threshold},
                      {"heldout_rms_after", vec(s.heldout_rms_after)}});
   nlohmann::json unexplained = nlohmann::json::array();
@@ -588,12 +704,27 @@ nlohmann::json to_json(const Diagnosis& d) {
                            {"size", u.size},
                            {"share", u.share},
                            {"value", u.value},
+                           {"floor_multiple", u.floor_multiple},
+                           {"band_hz", {u.band_low, u.band_high}},
+                           {"side", u.side},
                            {"detail", u.detail}});
+  nlohmann::json floor = nlohmann::json::array();
+  for (int j = 0; j < kNumJoints; ++j) {
+    const NoiseFloor& f = d.noise_floor[static_cast<std::size_t>(j)];
+    floor.push_back({{"joint", j + 1}, {"rms", f.rms}, {"measured_rms", f.measured_rms},
+                     {"model_input_rms", f.model_input_rms}});
+  }
   out["verdict"] = {{"causes", d.causes},
                     {"dropped", d.dropped},
                     {"unexplained", unexplained},
                     {"heldout_rms_after", vec(d.verdict_heldout_rms_after)},
                     {"unexplained_fraction", d.unexplained_fraction},
+                    {"unexplained_split",
+                     {{"noise", d.unexplained_noise},
+                      {"model_input", d.unexplained_model_input},
+                      {"rest", d.unexplained_rest}}},
+                    {"noise_floor", floor},
+                    {"warnings", d.warnings},
                     {"params", d.verdict_params},
                     {"selection", steps}};
   nlohmann::json where = nlohmann::json::array();

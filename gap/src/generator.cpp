@@ -77,13 +77,44 @@ InjectedEffects realistic_effect(const std::string& name, const Model& model, un
   return truth;
 }
 
-InjectedEffects outside_library_effect(unsigned seed) {
+InjectedEffects outside_library_effect(const std::string& kind, unsigned seed) {
   std::mt19937_64 engine(seed);
   InjectedEffects truth;
-  truth.vibration_joint = 1 + static_cast<int>(seed % kNumJoints);
-  truth.vibration_amplitude = uniform(engine, 0.4, 0.7);
-  truth.vibration_frequency = uniform(engine, 2.0, 3.0);
+  // A vibration of joint 1 + (seed + shift) % 7, amplitude [N m] and frequency [Hz] drawn uniformly.
+  auto vibration = [&](unsigned shift, double amplitude_low, double amplitude_high, double low, double high) {
+    truth.vibration_joint = 1 + static_cast<int>((seed + shift) % kNumJoints);
+    truth.vibration_amplitude = uniform(engine, amplitude_low, amplitude_high);
+    truth.vibration_frequency = uniform(engine, low, high);
+  };
+  if (kind == "vibration") {
+    vibration(0, 0.4, 0.7, 2.0, 3.0);
+  } else if (kind == "configuration_vibration") {
+    vibration(3, 0.4, 0.7, 3.0, 4.5);
+    truth.vibration_configuration = 0.8;
+  } else if (kind == "speed_rumble") {
+    vibration(5, 0.5, 0.8, 6.0, 9.0);
+    truth.vibration_speed = 1.0;
+  } else if (kind == "velocity_sensor_ripple") {
+    truth.velocity_ripple_joint = 1 + static_cast<int>(seed % 4);
+    truth.velocity_ripple_amplitude = uniform(engine, 0.01, 0.02);
+    truth.velocity_ripple_frequency = uniform(engine, 8.0, 12.0);
+  } else if (kind == "reversal_ringing") {
+    truth.ringing_joint = 1 + static_cast<int>((seed + 2) % kNumJoints);
+    truth.ringing_amplitude = uniform(engine, 0.5, 1.0);
+    truth.ringing_frequency = uniform(engine, 5.0, 8.0);
+    truth.ringing_decay = uniform(engine, 0.2, 0.4);
+  } else {
+    throw std::invalid_argument("unknown outside-library effect `" + kind + "`");
+  }
   return truth;
+}
+
+Vector7 velocity_sensor_error(const InjectedEffects& truth, double t) {
+  Vector7 error = Vector7::Zero();
+  if (truth.velocity_ripple_joint)
+    error[truth.velocity_ripple_joint - 1] =
+        truth.velocity_ripple_amplitude * std::sin(2.0 * M_PI * truth.velocity_ripple_frequency * t);
+  return error;
 }
 
 InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b) {
@@ -104,7 +135,14 @@ InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b) {
   m.drift_rate += b.drift_rate;
   if (b.vibration_joint)
     m.vibration_joint = b.vibration_joint, m.vibration_amplitude = b.vibration_amplitude,
-    m.vibration_frequency = b.vibration_frequency;
+    m.vibration_frequency = b.vibration_frequency, m.vibration_configuration = b.vibration_configuration,
+    m.vibration_speed = b.vibration_speed;
+  if (b.ringing_joint)
+    m.ringing_joint = b.ringing_joint, m.ringing_amplitude = b.ringing_amplitude,
+    m.ringing_frequency = b.ringing_frequency, m.ringing_decay = b.ringing_decay;
+  if (b.velocity_ripple_joint)
+    m.velocity_ripple_joint = b.velocity_ripple_joint, m.velocity_ripple_amplitude = b.velocity_ripple_amplitude,
+    m.velocity_ripple_frequency = b.velocity_ripple_frequency;
   return m;
 }
 
@@ -156,7 +194,7 @@ ModelParameters truth_parameters(const Model& model, const InjectedEffects& trut
 
 bool InjectedJointTorque::present(const InjectedEffects& truth) {
   return !truth.ripple_amplitude.isZero() || !truth.hysteresis_amplitude.isZero() || !truth.load_friction.isZero() ||
-         truth.vibration_joint != 0;
+         truth.vibration_joint != 0 || truth.ringing_joint != 0;
 }
 
 Vector7 InjectedJointTorque::operator()(double t, const Vector7& q, const Vector7& dq, const Vector7& tau_transmitted) {
@@ -169,10 +207,22 @@ Vector7 InjectedJointTorque::operator()(double t, const Vector7& q, const Vector
                                     : hysteresis_torque(truth_.hysteresis_amplitude[j], z_[j], dq[j])) +
              load_friction(truth_.load_friction[j], tau_transmitted[j], dq[j]);
   }
+  if (truth_.ringing_joint) {
+    const int j = truth_.ringing_joint - 1;
+    if (started_ && dq[j] * dq_previous_ < 0.0) last_reversal_ = t;
+    dq_previous_ = dq[j];
+    const double since = t - last_reversal_;
+    tau[j] += truth_.ringing_amplitude * std::exp(-since / truth_.ringing_decay) *
+              std::sin(2.0 * M_PI * truth_.ringing_frequency * since);
+  }
   started_ = true;
   q_previous_ = q;
-  if (truth_.vibration_joint)
-    tau[truth_.vibration_joint - 1] += truth_.vibration_amplitude * std::sin(2.0 * M_PI * truth_.vibration_frequency * t);
+  if (truth_.vibration_joint) {
+    const int j = truth_.vibration_joint - 1;
+    double amplitude = truth_.vibration_amplitude * (1.0 + truth_.vibration_configuration * std::cos(2.0 * q[1]));
+    if (truth_.vibration_speed > 0.0) amplitude *= std::abs(dq[j]) / truth_.vibration_speed;
+    tau[j] += amplitude * std::sin(2.0 * M_PI * truth_.vibration_frequency * t);
+  }
   return tau;
 }
 
@@ -199,7 +249,7 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
     trajectory.state(t, q, dq, ddq);
     log.t.push_back(t);
     log.q.push_back(q + noise(Vector7::Constant(options.position_noise)));
-    log.dq.push_back(dq + noise(Vector7::Constant(options.velocity_noise)));
+    log.dq.push_back(dq + velocity_sensor_error(truth, t) + noise(Vector7::Constant(options.velocity_noise)));
     trajectory.state(t - truth.delay, q, dq, ddq);  // the torque the sensor reports now
     rnea(true_model, data, q, dq, ddq, rigid);
     Vector7 tau = rigid + friction_torque(p.friction, dq) + friction_torque(truth.friction, dq) +

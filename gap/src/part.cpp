@@ -38,6 +38,7 @@ Part subset(const Part& part, const std::vector<bool>& keep) {
   const Samples& from = part.samples;
   Samples& to = out.samples;
   to.source = from.source, to.grid_q = from.grid_q, to.grid_dq = from.grid_dq, to.filter = from.filter;
+  to.stride = from.stride, to.ddq_differentiated = from.ddq_differentiated;
   std::vector<Eigen::Index> rows;
   for (std::size_t k = 0; k < from.size(); ++k) {
     if (!keep[k]) continue;

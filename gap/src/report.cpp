@@ -21,10 +21,67 @@ std::string joint_row(const char* name, const Vector7& v) {
   return row + "\n";
 }
 
+// What to add or check for a structure of each kind.
+std::string advice(const UnexplainedStructure& u) {
+  if (u.side == kModelInput)
+    return "it is in the model's prediction, not the robot: above the motion's band, noise its inputs carry in (log "
+           "the acceleration, or smooth the velocity more before differentiating it); within it, check the fitted "
+           "causes' warnings";
+  if (u.kind == "offset") return "check the torque sensor's zero (sensor_offset)";
+  if (u.kind == "time_drift") return "check for a warming sensor or joint (thermal_drift)";
+  if (u.kind == "position_periodic") return "check the gear for ripple or cogging (position_ripple)";
+  if (u.kind == "velocity_sign" || u.kind == "velocity") return "refit the joint's friction (joint_friction)";
+  if (u.kind == "hysteresis") return "add presliding friction (friction_hysteresis)";
+  if (u.kind == "acceleration") return "check the rotor inertia (armature) and the inertial parameters";
+  if (u.kind == "torque_level") return "check the torque sensor's gain (sensor_gain)";
+  if (u.kind == "time_periodic")
+    return format("look for a resonance at %.2f Hz: the arm's structure, its mount, the tool, or the controller", u.value);
+  if (u.kind == "motion_periodic")
+    return "a torque that follows the motion is missing: check the inertial parameters, the friction and the payload";
+  if (u.kind == "band")
+    return format("look for a vibration near %.2f Hz whose amplitude varies, e.g. a mode of the arm excited more in "
+                  "some configurations", u.value);
+  return "look for a contact or a push at that time";
+}
+
 }  // namespace
 
+std::string finding(const Diagnosis& d) {
+  double baseline = 0.0;
+  int worst = 0;
+  for (int j = 0; j < kNumJoints; ++j) {
+    baseline += d.baseline_heldout_rms[j] * d.baseline_heldout_rms[j];
+    if (d.baseline_heldout_rms[j] > d.baseline_heldout_rms[worst]) worst = j;
+  }
+  std::string out = format("The simulator model misses %.3f N m RMS per joint on the held-out part (joint %d most, %.3f N m). ",
+                           std::sqrt(baseline / kNumJoints), worst + 1, d.baseline_heldout_rms[worst]);
+  if (d.causes.empty()) {
+    out += "No effect of the library explains it. ";
+  } else {
+    out += "Adding ";
+    for (std::size_t i = 0; i < d.causes.size(); ++i) out.append(i ? ", " : "").append(d.causes[i]);
+    out += format(" removes %.0f %% of its mean square. ", 100.0 * (1.0 - d.unexplained_fraction));
+  }
+  out += format("Of the %.1f %% left, %.1f %% is the torque sensor's noise, %.1f %% lies in the model's input (noise "
+                "its velocity carries into the predicted torque) and %.1f %% is the rest. ",
+                100.0 * d.unexplained_fraction, 100.0 * d.unexplained_noise, 100.0 * d.unexplained_model_input,
+                100.0 * d.unexplained_rest);
+  const auto robot = std::find_if(d.unexplained.begin(), d.unexplained.end(),
+                                  [](const UnexplainedStructure& u) { return u.side != kModelInput; });
+  if (robot == d.unexplained.end()) {
+    out += "Nothing above the noise floor is left in the measured torque.";
+  } else {
+    out += format("The strongest structure left: joint %d, %s%s, %.3f N m (%.1f times the floor): %s.", robot->joint,
+                  robot->kind.c_str(),
+                  robot->band_high > 0.0 ? format(" at %.1f-%.1f Hz", robot->band_low, robot->band_high).c_str() : "",
+                  robot->size, robot->floor_multiple, advice(*robot).c_str());
+  }
+  for (const std::string& w : d.warnings) out += " Not physical: " + w + ".";
+  return out;
+}
+
 std::string summary(const Diagnosis& d) {
-  std::string out = "where the gap lies (residual = measured - predicted, both parts):\n";
+  std::string out = finding(d) + "\n\nwhere the gap lies (residual = measured - predicted, both parts):\n";
   out += "  joint   rms[Nm]  mean[Nm]  max[Nm]  at t[s]      sign step  corr: q     dq   sign(dq)  ddq   gravity\n";
   for (int j = 0; j < kNumJoints; ++j) {
     const JointGap& g = d.where[j];
@@ -33,11 +90,12 @@ std::string summary(const Diagnosis& d) {
                   g.correlation.at("dq"), g.correlation.at("sign_dq"), g.correlation.at("ddq"),
                   g.correlation.at("gravity"));
   }
-  out += "effects, each alone (fitted on training, judged on held-out):\n";
+  out += "effects, each alone (fitted on training, judged on held-out below 5 Hz):\n";
   for (const EffectResult& e : d.effects)
-    out += format("  %-20s %3d params  explains %5.1f%% of held-out MS (random regressors: %5.1f%%)  %s\n",
-                  e.name.c_str(), e.parameter_count, 100 * e.explained_fraction, 100 * std::max(0.0, e.null_threshold),
-                  e.significant ? "significant" : "-");
+    out += format("  %-20s %3d params  explains %5.1f%% of held-out MS, %5.1f%% below 5 Hz (random regressors: "
+                  "%5.1f%%)  %s\n",
+                  e.name.c_str(), e.parameter_count, 100 * e.explained_fraction, 100 * e.judged_fraction,
+                  100 * std::max(0.0, e.null_threshold), e.significant ? "significant" : "-");
   out += "verdict: ";
   if (d.causes.empty()) out += "no effect of the library explains the gap significantly";
   for (std::size_t i = 0; i < d.causes.size(); ++i) out.append(i ? ", " : "").append(d.causes[i]);
@@ -47,6 +105,10 @@ std::string summary(const Diagnosis& d) {
   for (int j = 0; j < kNumJoints; ++j) out += format(" %.3f", d.verdict_heldout_rms_after[j]);
   out += format("\nunexplained: %.1f%% of the held-out mean square\n", 100 * d.unexplained_fraction);
   for (const UnexplainedStructure& u : d.unexplained) out += "  " + u.detail + "\n";
+  out += "noise floor per joint [Nm] (measured torque / model input):";
+  for (const NoiseFloor& f : d.noise_floor) out += format(" %.3f/%.3f", f.measured_rms, f.model_input_rms);
+  out += "\n";
+  for (const std::string& w : d.warnings) out += "warning: " + w + "\n";
   return out;
 }
 
@@ -99,7 +161,8 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
       else x.push_back(h.samples.t[k]);
     }
     PlotPanel p{format("joint %d: %s", u.joint, u.kind.c_str()), axis, "residual left [N m]", {}, {}};
-    p.series.push_back({"held out, after the causes", "#9467bd", x, joint_series(left, j), u.kind != "time_periodic"});
+    p.series.push_back({"held out, after the causes", "#9467bd", x, joint_series(left, j),
+                        u.kind != "time_periodic" && u.kind != "band"});
     unexplained.push_back(p);
   }
   const fs::path folder(dir);
@@ -116,7 +179,7 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
   std::string md = "# Sim-to-real gap report\n\n`" + command_line + "`\n\n";
   md += format("Training: %s (%zu samples); held out: %s (%zu samples).\n\n", d.train.samples.source.c_str(),
                d.train.samples.size(), d.heldout.samples.source.c_str(), d.heldout.samples.size());
-  md += "## Verdict\n\n";
+  md += finding(d) + "\n\n## Verdict\n\n";
   if (d.causes.empty()) md += "No effect of the library explains the gap significantly.\n\n";
   for (std::size_t i = 0; i < d.causes.size(); ++i)
     md.append(i == 0 ? "Causes, most important first: `" : ", `")
@@ -125,17 +188,22 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
   md += "| held-out RMS [N m] | J1 | J2 | J3 | J4 | J5 | J6 | J7 |\n|---|---|---|---|---|---|---|---|\n";
   md +=
       joint_row("simulator model", d.baseline_heldout_rms) + joint_row("with the causes", d.verdict_heldout_rms_after);
-  md += format("\nUnexplained: %.1f %% of the held-out mean square remains.\n\n", 100 * d.unexplained_fraction);
+  md += format("\nUnexplained: %.1f %% of the held-out mean square remains: %.1f %% the torque sensor's noise, %.1f %% in "
+               "the model's input, %.1f %% the rest.\n\n",
+               100 * d.unexplained_fraction, 100 * d.unexplained_noise, 100 * d.unexplained_model_input,
+               100 * d.unexplained_rest);
+  for (const std::string& w : d.warnings) md += "**Not physical:** " + w + ".\n\n";
   for (const UnexplainedStructure& u : d.unexplained) md += "- " + u.detail + "\n";
   if (!d.unexplained.empty()) md += "\n![unexplained](unexplained.svg)\n\n";
   md += "![torque](torque_heldout.svg)\n\n## Effects, each alone\n\n";
-  md += "| effect | parameters | explained | random regressors | significant | joints |\n|---|---|---|---|---|---|\n";
+  md += "| effect | parameters | explained | below 5 Hz (judged) | random regressors | significant | joints |\n"
+        "|---|---|---|---|---|---|---|\n";
   for (const EffectResult& e : d.effects) {
     std::string joints;
     for (int j : e.joints) joints.append(joints.empty() ? "" : ",").append(std::to_string(j));
-    md += format("| %s | %d | %.1f %% | %.1f %% | %s | %s |\n", e.name.c_str(), e.parameter_count,
-                 100 * e.explained_fraction, 100 * std::max(0.0, e.null_threshold), e.significant ? "yes" : "no",
-                 joints.c_str());
+    md += format("| %s | %d | %.1f %% | %.1f %% | %.1f %% | %s | %s |\n", e.name.c_str(), e.parameter_count,
+                 100 * e.explained_fraction, 100 * e.judged_fraction, 100 * std::max(0.0, e.null_threshold),
+                 e.significant ? "yes" : "no", joints.c_str());
   }
   md += "\n![ranking](effect_ranking.svg)\n\n## Where the gap lies\n\n```\n" + summary(d) + "```\n\n";
   md += "![residual vs velocity](residual_vs_velocity.svg)\n\n## Fitted parameters of the causes\n\n```json\n" +

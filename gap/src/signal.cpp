@@ -25,6 +25,17 @@ Vector7 SavitzkyGolay::apply(const std::vector<Vector7>& series, std::size_t cen
   return sum;
 }
 
+double SavitzkyGolay::noise_spectrum(int derivative, std::size_t stride, double frequency) const {
+  const Eigen::VectorXd& w = derivative == 0 ? value_weights_ : derivative_weights_;
+  double density = 0.0;
+  for (Eigen::Index lag = 0; lag < w.size(); lag += static_cast<Eigen::Index>(stride)) {
+    const double r = w.head(w.size() - lag).dot(w.tail(w.size() - lag));
+    const double m = static_cast<double>(lag / static_cast<Eigen::Index>(stride));
+    density += (lag == 0 ? 1.0 : 2.0) * r * std::cos(2.0 * M_PI * frequency * m);
+  }
+  return density;
+}
+
 namespace {
 
 // Linear interpolation of `series` (at times t) onto the grid t0 + k dt, k = 0..n-1.
@@ -76,7 +87,7 @@ Samples filter_log(const JointLog& log, const FilterOptions& options) {
     s.dtau.push_back(filter->apply(tau, k, 1));
     s.grid_index.push_back(k);
   }
-  s.grid_q = q, s.grid_dq = dq, s.filter = filter;
+  s.grid_q = q, s.grid_dq = dq, s.filter = filter, s.stride = stride, s.ddq_differentiated = ddq.empty();
   return s;
 }
 

@@ -34,6 +34,7 @@ struct EffectResult {
   nlohmann::json params;
   Vector7 train_rms_after = Vector7::Zero(), heldout_rms_after = Vector7::Zero();
   double explained_fraction = 0.0;  // of the held-out mean square it started from, clipped to 0..1
+  double judged_fraction = 0.0;     // of it, what it removes within the excitation band (the significance's)
   double null_threshold = 0.0;      // best held-out improvement of the random regressors of its size
   bool significant = false;
 };
@@ -48,17 +49,32 @@ struct JointGap {
 };
 inline constexpr std::array<double, 3> kBandEdges = {0.5, 2.0, 5.0};
 
-// What stays unexplained after the verdict, localised: the strongest structure of one joint's
-// held-out residual (docs/gap.md lists the kinds and the rules).
+// The noise floor of one joint's residual left after the verdict: the broadband level of its
+// spectrum (unexplained.cpp, noise_floor), split between the two sides of residual =
+// measured - model by the same levels of their own spectra (docs/gap.md, "Noise floor").
+struct NoiseFloor {
+  double rms = 0.0;              // [N m] the residual's noise
+  double measured_rms = 0.0;     // its part in the measured torque: the sensor's noise
+  double model_input_rms = 0.0;  // its part in the model's torque: the noise of its inputs (ddq from dq)
+};
+
+// What the verdict leaves unexplained, localised: a structure of one joint's held-out residual
+// standing above the noise floor (docs/gap.md lists the kinds and the rules).
 struct UnexplainedStructure {
   int joint = 0;        // 1-based
-  std::string kind;     // offset, time_drift, time_periodic, position_periodic, velocity_sign, velocity,
-                        // hysteresis, acceleration, torque_level, high_frequency, motion_periodic, transient
-  double size = 0.0;    // RMS of the structure's fitted torque [N m]
+  std::string kind;     // offset, time_drift, position_periodic, velocity_sign, velocity, hysteresis,
+                        // acceleration, torque_level, time_periodic, motion_periodic, band, transient
+  double size = 0.0;    // RMS of the structure's torque [N m]
   double share = 0.0;   // of the joint's remaining held-out mean square it accounts for
   double value = 0.0;   // the structure's parameter: period [rad], frequency [Hz], slope, start [s] ...
+  double floor_multiple = 0.0;             // size / what the noise floor alone puts in the same kind (band)
+  double band_low = 0.0, band_high = 0.0;  // [Hz] the band of the spectral kinds (0 for the others)
+  std::string side;     // measured_torque (a torque the robot has and the model lacks, or the sensor's)
+                        // or model_input (in the model's prediction: the noise its inputs carry in)
   std::string detail;   // one plain sentence
 };
+inline constexpr const char* kMeasuredTorque = "measured_torque";
+inline constexpr const char* kModelInput = "model_input";
 
 // A short disturbance in one part: a few stretches of the residual left after the causes far above
 // the rest (docs/gap.md, "Backward check").
@@ -87,14 +103,25 @@ struct Diagnosis {
   Eigen::VectorXd verdict_heldout_torque;  // the causes' torque on the held-out part (stacked)
   std::vector<UnexplainedStructure> unexplained;  // strongest first (transients too, kind "transient")
   std::vector<Transient> transients;              // left out of the backward check
+  std::array<NoiseFloor, kNumJoints> noise_floor; // of the held-out residual left
+  // The held-out mean square left (unexplained_fraction of the baseline's), split: the measured
+  // torque's noise floor; the model's input (its noise floor and its bands above the floor); the rest.
+  double unexplained_noise = 0.0, unexplained_model_input = 0.0, unexplained_rest = 0.0;
+  std::vector<std::string> warnings;              // fits that are not physical (docs/gap.md)
 };
 
-// The structures of the residual `left` (stacked, on `part`) that account for at least
-// kUnexplainedShare of a joint's mean square and kUnexplainedSize of torque; `causes` are the
-// selected effects (a structure a library effect could model but which was not selected says so).
-inline constexpr double kUnexplainedShare = 0.3, kUnexplainedSize = 0.03;  // [-], [N m]
-std::vector<UnexplainedStructure> localise_unexplained(const Part& part, const Eigen::VectorXd& left,
-                                                       const std::vector<std::string>& causes);
+// The residual `left` (stacked, on `part`) after the verdict: its noise floor per joint and its
+// structures above it, at most kMaxStructures per joint, each found on what the stronger ones left
+// and at least kUnexplainedSize of torque and kUnexplainedShare of the joint's mean square left;
+// `causes` are the selected effects (a structure a library effect could model but which was not
+// selected says so).
+inline constexpr double kUnexplainedSize = 0.03, kUnexplainedShare = 0.1;  // [N m], [-]
+inline constexpr int kMaxStructures = 3;
+struct Localisation {
+  std::array<NoiseFloor, kNumJoints> floor;
+  std::vector<UnexplainedStructure> structures;  // strongest first
+};
+Localisation localise_unexplained(const Part& part, const Eigen::VectorXd& left, const std::vector<std::string>& causes);
 
 Diagnosis diagnose(const Model& model, const JointLog& train, const JointLog& heldout,
                    const DiagnosisOptions& options = {});

@@ -32,15 +32,35 @@ struct InjectedEffects {
   Vector7 load_friction = Vector7::Zero();                        // friction per N m transmitted
   Vector7 drift_rate = Vector7::Zero();                           // sensor offset drift [N m/s]
   // Outside every library effect on purpose (the check that the diagnosis names no false cause and
-  // localises what it cannot name): a structural vibration of one joint at a fixed frequency.
+  // localises what it cannot name): a structural vibration of one joint, its amplitude constant, or
+  // following the configuration (times 1 + vibration_configuration cos(2 q2): the arm's stiffness
+  // changes with the shoulder's angle), or the joint's speed (times |dq_j| / vibration_speed: a
+  // rumble growing with speed);
   int vibration_joint = 0;                                        // 1..7; 0 = none
   double vibration_amplitude = 0.0, vibration_frequency = 0.0;    // [N m], [Hz]
+  double vibration_configuration = 0.0, vibration_speed = 0.0;    // [-], [rad/s]; 0 = not
+  // a ringing of one joint after each of its velocity reversals (its elasticity: a decaying sinusoid,
+  // amplitude [N m] at the reversal, frequency [Hz], decay time [s]);
+  int ringing_joint = 0;                                          // 1..7; 0 = none
+  double ringing_amplitude = 0.0, ringing_frequency = 0.0, ringing_decay = 0.0;
+  // and a ripple of a velocity sensor: the logged dq of one joint reads a sinusoid the motion has not.
+  int velocity_ripple_joint = 0;                                  // 1..7; 0 = none
+  double velocity_ripple_amplitude = 0.0, velocity_ripple_frequency = 0.0;  // [rad/s], [Hz]
 };
 
 // One effect of the library (docs/gap.md lists the sizes), or "none", drawn with `seed`.
 InjectedEffects realistic_effect(const std::string& name, const Model& model, unsigned seed);
-// The effect kept out of the library: a vibration of 0.4-0.7 N m at 2-3 Hz on joint 1 + seed % 7.
-InjectedEffects outside_library_effect(unsigned seed);
+// An effect kept out of the library, drawn with `seed`:
+// - "vibration": 0.4-0.7 N m at 2-3 Hz on joint 1 + seed % 7;
+// - "configuration_vibration": 0.4-0.7 N m at 3-4.5 Hz following the configuration (depth 0.8) on
+//   joint 1 + (seed + 3) % 7;
+// - "speed_rumble": 0.5-0.8 N m per rad/s at 6-9 Hz on joint 1 + (seed + 5) % 7;
+// - "velocity_sensor_ripple": 0.01-0.02 rad/s at 8-12 Hz in the velocity of joint 1 + seed % 4;
+// - "reversal_ringing": 0.5-1 N m at 5-8 Hz decaying over 0.2-0.4 s after each velocity reversal of
+//   joint 1 + (seed + 2) % 7.
+InjectedEffects outside_library_effect(const std::string& kind, unsigned seed);
+// What the velocity sensors read beyond the motion's dq at time t.
+Vector7 velocity_sensor_error(const InjectedEffects& truth, double t);
 // Both injections (each sets different fields).
 InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b);
 
@@ -71,6 +91,7 @@ class InjectedJointTorque {
   Dahl dahl_;
   bool started_ = false;
   Vector7 z_ = Vector7::Zero(), q_previous_ = Vector7::Zero();  // Dahl's state and where it was
+  double last_reversal_ = -1e9, dq_previous_ = 0.0;             // of the ringing joint [s], [rad/s]
 };
 
 // The generator's excitation: a finite Fourier series per joint (as Gaz et al.'s real trajectories),

@@ -25,6 +25,12 @@ class SavitzkyGolay {
   int half_width() const { return half_width_; }
   // Weighted sum of series[centre - m .. centre + m]; derivative = 0 (value) or 1 (d/dt).
   Vector7 apply(const std::vector<Vector7>& series, std::size_t centre, int derivative) const;
+  // The power spectral density of white noise of unit variance on the grid, smoothed (derivative 0)
+  // or differentiated (1) by this filter and then kept every `stride`-th sample, at `frequency` in
+  // cycles per kept sample (0 .. 0.5): sum over m of R(m) cos(2 pi frequency m), R(m) the
+  // autocorrelation of the weights at lag m stride (aliasing included). Its mean over the band is
+  // the kept samples' variance, R(0).
+  double noise_spectrum(int derivative, std::size_t stride, double frequency) const;
 
  private:
   int half_width_;
@@ -45,6 +51,8 @@ struct Samples {
   // smoothed, as the measured torque was, not evaluated on the smoothed motion.
   std::vector<Vector7> grid_q, grid_dq;
   std::vector<std::size_t> grid_index;           // grid index of each sample
+  std::size_t stride = 1;                        // grid points per sample
+  bool ddq_differentiated = true;                // ddq is dq differentiated (else the log's ddq, smoothed)
   std::shared_ptr<const SavitzkyGolay> filter;   // the smoothing filter of the samples
   // A series on the grid smoothed at each sample's grid index, as the measured torque is.
   std::vector<Vector7> smoothed(const std::vector<Vector7>& grid_series) const;
