@@ -209,6 +209,10 @@ void localises_what_no_library_effect_explains(Generator generate, const std::st
       power += u.size * u.size;
       EXPECT_EQ(u.side, sensor ? kModelInput : kMeasuredTorque) << effect << " seed " << seed;
       EXPECT_GT(u.floor_multiple, 3.0) << effect << " seed " << seed;
+      // The ripple reaches the prediction of every joint M couples to its joint: one mode on several.
+      if (sensor) {
+        EXPECT_GE(u.mode_joints.size(), 2u) << effect << " seed " << seed << ": " << u.detail;
+      }
     }
     EXPECT_TRUE(found) << effect << " seed " << seed << ": nothing at " << frequency << " Hz on joint " << joint;
     if (effect == "vibration") {

@@ -652,8 +652,9 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   split_unexplained(d, left);
   for (const Transient& t : d.transients) {
     const double floor = d.noise_floor[static_cast<std::size_t>(t.joint - 1)].rms;
-    UnexplainedStructure u{t.joint, "transient", t.size, t.share, t.start, floor > 0.0 ? t.size / floor : 0.0,
-                           0.0,     0.0,         kMeasuredTorque, ""};
+    UnexplainedStructure u;
+    u.joint = t.joint, u.kind = "transient", u.size = t.size, u.share = t.share, u.value = t.start;
+    u.floor_multiple = floor > 0.0 ? t.size / floor : 0.0, u.side = kMeasuredTorque;
     u.detail = format("joint %d: a transient of %.3f N m at %.2f-%.2f s in the %s part (%.0f %% of what is left on it "
                       "there); no library effect (a push, a contact?); the selection left it out",
                       t.joint, t.size, t.start, t.end, t.heldout ? "held-out" : "training", 100.0 * t.share);
@@ -707,6 +708,9 @@ nlohmann::json to_json(const Diagnosis& d) {
                            {"floor_multiple", u.floor_multiple},
                            {"band_hz", {u.band_low, u.band_high}},
                            {"side", u.side},
+                           {"from_joint", u.from_joint},
+                           {"mode_joints", u.mode_joints},
+                           {"mode_phase_deg", u.mode_phase_deg},
                            {"detail", u.detail}});
   nlohmann::json floor = nlohmann::json::array();
   for (int j = 0; j < kNumJoints; ++j) {

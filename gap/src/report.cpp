@@ -34,6 +34,11 @@ std::string advice(const UnexplainedStructure& u) {
   if (u.kind == "hysteresis") return "add presliding friction (friction_hysteresis)";
   if (u.kind == "acceleration") return "check the rotor inertia (armature) and the inertial parameters";
   if (u.kind == "torque_level") return "check the torque sensor's gain (sensor_gain)";
+  if (u.kind == "torque_of_joint")
+    return format("check joint %d's torque sensor for crosstalk from joint %d's, or a coupling between them (a cable, "
+                  "the link's elasticity)", u.joint, u.from_joint);
+  if (u.kind == "velocity_of_joint" || u.kind == "position_of_joint")
+    return format("look for a coupling from joint %d (a cable, a hose, the link's elasticity)", u.from_joint);
   if (u.kind == "time_periodic")
     return format("look for a resonance at %.2f Hz: the arm's structure, its mount, the tool, or the controller", u.value);
   if (u.kind == "motion_periodic")
@@ -158,6 +163,12 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
         x.push_back(h.samples.dq[k][j]), axis = format("dq%d [rad/s]", u.joint);
       else if (u.kind == "acceleration") x.push_back(h.samples.ddq[k][j]), axis = format("ddq%d [rad/s^2]", u.joint);
       else if (u.kind == "torque_level") x.push_back(h.predicted[k][j]), axis = "model torque [N m]";
+      else if (u.kind == "torque_of_joint")
+        x.push_back(h.predicted[k][u.from_joint - 1]), axis = format("joint %d's model torque [N m]", u.from_joint);
+      else if (u.kind == "velocity_of_joint")
+        x.push_back(h.samples.dq[k][u.from_joint - 1]), axis = format("dq%d [rad/s]", u.from_joint);
+      else if (u.kind == "position_of_joint")
+        x.push_back(h.samples.q[k][u.from_joint - 1]), axis = format("q%d [rad]", u.from_joint);
       else x.push_back(h.samples.t[k]);
     }
     PlotPanel p{format("joint %d: %s", u.joint, u.kind.c_str()), axis, "residual left [N m]", {}, {}};

@@ -1,8 +1,9 @@
 // What the verdict leaves unexplained, localised (docs/gap.md, "What stays unexplained").
-// Per joint, the held-out residual that is left is first given its noise floor: the broadband level
-// of its spectrum above the excitation band, split between the measured torque and the model's
-// input by the same levels of their own spectra. Structure is then sought above that floor, the
-// strongest first and each on what the stronger ones left:
+// Per joint, the held-out residual that is left is first given its noise floor: the torque sensor's
+// noise through the smoothing filter plus the model input's through the differentiator, each with
+// its exact shape for white noise, scaled to its own side's spectrum above the excitation band.
+// Structure is then sought above that floor, the strongest first and each on what the stronger ones
+// left:
 // - kinds fitted by least squares, each a shape a real arm's torque error can have (a constant, a
 //   drift in time, a sinusoid in the joint's position, dependence on the velocity's sign or value, on
 //   the direction of acceleration (a loop in residual vs velocity: hysteresis), on acceleration, on
@@ -42,17 +43,21 @@ struct Candidate {
   double noise = 0.0;   // what noise alone puts there on average, in the same units
   double value = 0.0, band_low = 0.0, band_high = 0.0;
   std::string side = kMeasuredTorque;
+  int from_joint = 0;
   VectorXd torque;      // the structure's torque at the samples
 };
 
-// The fitted kinds of one joint: each a regressor column, or the sinusoid in position scanned over
-// periods. `capture` is the least-squares fit's captured energy and the fitted torque.
+// The fitted kinds of one joint: each a regressor column (its own motion's or torque's, or another
+// joint's: a residual driven by joint j), or the sinusoid in position scanned over periods.
+// `capture` is the least-squares fit's captured energy and the fitted torque.
+struct Column {
+  const char* kind;
+  int from_joint;  // 1-based: the other joint whose torque, velocity or position it is; 0 = its own
+};
 class FittedKinds {
  public:
-  static constexpr std::array<const char*, 7> kColumns = {"offset",     "time_drift", "velocity_sign",
-                                                          "velocity",   "hysteresis", "acceleration",
-                                                          "torque_level"};
-  FittedKinds(const MatrixXd& columns, const VectorXd& q) : columns_(columns) {
+  FittedKinds(const MatrixXd& columns, std::vector<Column> names, const VectorXd& q)
+      : columns_(columns), names_(std::move(names)) {
     // Position periods 0.03-2 rad, log spaced: sin and cos columns with their 2 x 2 Gram matrices.
     constexpr int kPeriods = 300;
     sin_.resize(q.size(), kPeriods + 1), cos_.resize(q.size(), kPeriods + 1);
@@ -66,12 +71,14 @@ class FittedKinds {
       gram_inverse_.push_back(gram.completeOrthogonalDecomposition().pseudoInverse());
     }
   }
-  int count() const { return static_cast<int>(kColumns.size()) + 1; }
-  const char* name(int kind) const { return kind < static_cast<int>(kColumns.size()) ? kColumns[kind] : "position_periodic"; }
+  int count() const { return static_cast<int>(names_.size()) + 1; }
+  Column name(int kind) const {
+    return kind < static_cast<int>(names_.size()) ? names_[static_cast<std::size_t>(kind)] : Column{"position_periodic", 0};
+  }
 
   // Kind `kind` fitted to r: the energy it captures, its parameter and torque.
   double capture(int kind, const VectorXd& r, double* value = nullptr, VectorXd* torque = nullptr) const {
-    if (kind < static_cast<int>(kColumns.size())) {
+    if (kind < static_cast<int>(names_.size())) {
       const auto column = columns_.col(kind);
       const double norm = std::max(column.squaredNorm(), 1e-300), coefficient = column.dot(r) / norm;
       if (value) *value = coefficient;
@@ -97,6 +104,7 @@ class FittedKinds {
 
  private:
   MatrixXd columns_, sin_, cos_;
+  std::vector<Column> names_;
   std::vector<double> periods_;
   std::vector<Eigen::Matrix2d> gram_inverse_;
 };
@@ -242,10 +250,22 @@ std::string describe(const UnexplainedStructure& u, const std::vector<std::strin
     what = format("a loop against dq%d: %.3f N m between accelerating and decelerating", j, u.value);
   if (u.kind == "acceleration") what = format("proportional to ddq%d (%.4f kg m^2)", j, u.value);
   if (u.kind == "torque_level") what = format("proportional to the model torque (%.1f %%)", 100.0 * u.value);
+  if (u.kind == "torque_of_joint")
+    what = format("proportional to joint %d's torque (%.2f %%): driven by joint %d (crosstalk of the torque sensors, "
+                  "a coupling)", u.from_joint, 100.0 * u.value, u.from_joint);
+  if (u.kind == "velocity_of_joint")
+    what = format("proportional to dq%d (%.3f N m s/rad): driven by joint %d", u.from_joint, u.value, u.from_joint);
+  if (u.kind == "position_of_joint")
+    what = format("proportional to q%d (%.3f N m/rad): driven by joint %d", u.from_joint, u.value, u.from_joint);
   const std::string side = u.side == kModelInput
                                ? "in the model's torque, not the measured one: from its inputs (q, dq and ddq "
                                  "estimated from the log) or its fitted causes, not the robot"
                                : "in the measured torque";
+  std::string mode;
+  for (std::size_t m = 0; m < u.mode_joints.size(); ++m)
+    mode += format("%s%d (%.0f deg)", m == 0 ? "; the same band on joints " : ", ", u.mode_joints[m],
+                   u.mode_phase_deg[m]);
+  if (!mode.empty()) what += mode + ": one mode";
   const std::string effect = library_effect_of(u.kind);
   std::string tail = "no library effect";
   if (!effect.empty())
@@ -306,6 +326,37 @@ Floor noise_floor(const Samples& s, const Periodogram& p, const VectorXd& measur
   return floor;
 }
 
+// A band standing on several joints at once is one mode of the arm (or of the model's inputs) seen on
+// each: the spectral structures whose bands overlap are grouped, and each gets the group's joints and
+// their phases at its peak (the least-squares sinusoid's) relative to its own.
+bool spectral(const UnexplainedStructure& u) { return u.band_high > 0.0 && u.kind != "transient"; }
+void shared_modes(std::vector<UnexplainedStructure>& structures, const std::array<VectorXd, kNumJoints>& residuals,
+                  const VectorXd& t) {
+  for (UnexplainedStructure& u : structures) {
+    if (!spectral(u)) continue;
+    // Each joint's phase at the peak: its residual's least-squares a sin(w t) + b cos(w t) = A sin(w t + phi).
+    const double w = 2.0 * M_PI * u.value;
+    MatrixXd A(t.size(), 2);
+    A.col(0) = (w * t).array().sin(), A.col(1) = (w * t).array().cos();
+    const auto qr = A.colPivHouseholderQr();
+    auto phase = [&](int joint) {
+      const Eigen::Vector2d ab = qr.solve(residuals[static_cast<std::size_t>(joint - 1)]);
+      return std::atan2(ab[1], ab[0]) * 180.0 / M_PI;
+    };
+    std::vector<int> joints;
+    for (const UnexplainedStructure& other : structures)
+      if (spectral(other) && other.band_low <= u.band_high && u.band_low <= other.band_high &&
+          std::find(joints.begin(), joints.end(), other.joint) == joints.end())
+        joints.push_back(other.joint);
+    if (joints.size() < 2) continue;
+    std::sort(joints.begin(), joints.end());
+    const double own = phase(u.joint);
+    u.mode_joints = joints, u.mode_phase_deg.clear();
+    for (int joint : joints)
+      u.mode_phase_deg.push_back(std::remainder(phase(joint) - own, 360.0));
+  }
+}
+
 }  // namespace
 
 Localisation localise_unexplained(const Part& part, const VectorXd& left, const std::vector<std::string>& causes) {
@@ -316,21 +367,39 @@ Localisation localise_unexplained(const Part& part, const VectorXd& left, const 
   const double sample_period = (s.t.back() - s.t.front()) / static_cast<double>(n - 1);
   VectorXd t(n);
   for (Eigen::Index k = 0; k < n; ++k) t[k] = s.t[static_cast<std::size_t>(k)];
+  std::array<VectorXd, kNumJoints> residuals;
   for (int j = 0; j < kNumJoints; ++j) {
     VectorXd r(n), q(n), measured(n), model(n);
-    MatrixXd columns(n, static_cast<Eigen::Index>(FittedKinds::kColumns.size()));
+    // Its own: offset, time_drift, velocity_sign, velocity, hysteresis (+1 speeding up, -1 slowing
+    // down, signed with the motion: the loop's branch), acceleration, torque_level; then each other
+    // joint's torque (the model's), velocity and position.
+    std::vector<Column> names = {{"offset", 0},   {"time_drift", 0},   {"velocity_sign", 0}, {"velocity", 0},
+                                 {"hysteresis", 0}, {"acceleration", 0}, {"torque_level", 0}};
+    for (int other = 0; other < kNumJoints; ++other)
+      if (other != j)
+        for (const char* kind : {"torque_of_joint", "velocity_of_joint", "position_of_joint"})
+          names.push_back({kind, other + 1});
+    MatrixXd columns(n, static_cast<Eigen::Index>(names.size()));
     for (Eigen::Index k = 0; k < n; ++k) {
       const auto i = static_cast<std::size_t>(k);
       const double dq = s.dq[i][j], ddq = s.ddq[i][j], sign = smooth_sign(dq);
       r[k] = left[kNumJoints * k + j], q[k] = s.q[i][j];
       measured[k] = s.tau[i][j], model[k] = s.tau[i][j] - r[k];  // the model with the causes
-      // offset, time_drift, velocity_sign, velocity, hysteresis (+1 speeding up, -1 slowing down,
-      // signed with the motion: the loop's branch), acceleration, torque_level.
-      columns.row(k) << 1.0, t[k] - s.t.front(), sign, dq, std::tanh(ddq * dq / 0.01) * sign, ddq,
+      columns.row(k).head<7>() << 1.0, t[k] - s.t.front(), sign, dq, std::tanh(ddq * dq / 0.01) * sign, ddq,
           part.predicted[i][j];
+      Eigen::Index c = 7;
+      for (int other = 0; other < kNumJoints; ++other)
+        if (other != j) {
+          columns(k, c++) = part.predicted[i][other];
+          columns(k, c++) = s.dq[i][other];
+          columns(k, c++) = s.q[i][other];
+        }
     }
+    // The drift and the other joints' columns centred: a constant is the offset's.
     columns.col(1).array() -= columns.col(1).mean();
+    for (Eigen::Index c = 7; c < columns.cols(); ++c) columns.col(c).array() -= columns.col(c).mean();
     const double mean_square = r.squaredNorm() / static_cast<double>(n);
+    residuals[static_cast<std::size_t>(j)] = r;
 
     const Floor floor_bins =
         noise_floor(s, periodogram(r, sample_period), measured, model, sample_period, mean_square);
@@ -339,7 +408,7 @@ Localisation localise_unexplained(const Part& part, const VectorXd& left, const 
     out.floor[static_cast<std::size_t>(j)] = floor;
 
     // What each fitted kind finds in noise alone.
-    const FittedKinds kinds(columns, q);
+    const FittedKinds kinds(columns, std::move(names), q);
     std::vector<double> threshold(static_cast<std::size_t>(kinds.count()), 0.0),
         in_noise(static_cast<std::size_t>(kinds.count()), 0.0);  // the mean capture
     std::mt19937_64 engine(1000u + static_cast<unsigned>(j));
@@ -360,7 +429,7 @@ Localisation localise_unexplained(const Part& part, const VectorXd& left, const 
           bands(rest, t, sample_period, level, measured, model, s);
       for (int kind = 0; kind < kinds.count(); ++kind) {
         Candidate c;
-        c.kind = kinds.name(kind);
+        c.kind = kinds.name(kind).kind, c.from_joint = kinds.name(kind).from_joint;
         c.energy = kinds.capture(kind, rest, &c.value, &c.torque);
         c.noise = in_noise[static_cast<std::size_t>(kind)];
         if (c.energy > threshold[static_cast<std::size_t>(kind)]) candidates.push_back(c);
@@ -373,13 +442,16 @@ Localisation localise_unexplained(const Part& part, const VectorXd& left, const 
       double value = best.value;
       if (best.kind == "time_drift") value *= 60.0;                                  // per minute
       if (best.kind == "velocity_sign" || best.kind == "hysteresis") value *= 2.0;  // the step between branches
-      UnexplainedStructure u{j + 1, best.kind, size, share, value, std::sqrt(best.energy / std::max(best.noise, 1e-300)),
-                             best.band_low, best.band_high, best.side, ""};
-      u.detail = describe(u, causes);
+      UnexplainedStructure u;
+      u.joint = j + 1, u.kind = best.kind, u.size = size, u.share = share, u.value = value;
+      u.floor_multiple = std::sqrt(best.energy / std::max(best.noise, 1e-300));
+      u.band_low = best.band_low, u.band_high = best.band_high, u.side = best.side, u.from_joint = best.from_joint;
       out.structures.push_back(u);
       rest -= best.torque;
     }
   }
+  shared_modes(out.structures, residuals, t);
+  for (UnexplainedStructure& u : out.structures) u.detail = describe(u, causes);
   std::sort(out.structures.begin(), out.structures.end(), [](const auto& a, const auto& b) { return a.size > b.size; });
   return out;
 }
