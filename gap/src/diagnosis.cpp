@@ -12,6 +12,7 @@
 #include <tuple>
 #include <unsupported/Eigen/FFT>
 
+#include "csp/gap/spectrum.hpp"
 #include "csp/io/svg_plot.hpp"
 
 namespace csp::gap {
@@ -159,17 +160,11 @@ nlohmann::json describe_set(const EffectSet& set, const SetFit& fit) {
 // localisation's (docs/gap.md, "Judged in the excitation band").
 VectorXd excitation_band(const VectorXd& stacked, double sample_period) {
   const Eigen::Index n = stacked.size() / kNumJoints;
+  const auto cut = static_cast<std::size_t>(std::floor(kBandEdges.back() * static_cast<double>(n) * sample_period));
   VectorXd out(stacked.size());
-  Eigen::FFT<double> fft;
-  std::vector<double> series(static_cast<std::size_t>(n));
-  std::vector<std::complex<double>> spectrum;
-  const auto cut = static_cast<Eigen::Index>(std::floor(kBandEdges.back() * static_cast<double>(n) * sample_period));
   for (int j = 0; j < kNumJoints; ++j) {
-    for (Eigen::Index k = 0; k < n; ++k) series[static_cast<std::size_t>(k)] = stacked[kNumJoints * k + j];
-    fft.fwd(spectrum, series);
-    for (Eigen::Index k = cut + 1; k < n - cut; ++k) spectrum[static_cast<std::size_t>(k)] = 0.0;
-    fft.inv(series, spectrum);
-    for (Eigen::Index k = 0; k < n; ++k) out[kNumJoints * k + j] = series[static_cast<std::size_t>(k)];
+    const Eigen::Map<const VectorXd, 0, Eigen::InnerStride<kNumJoints>> joint(stacked.data() + j, n);
+    Eigen::Map<VectorXd, 0, Eigen::InnerStride<kNumJoints>>(out.data() + j, n) = band_component(joint, 0, cut);
   }
   return out;
 }

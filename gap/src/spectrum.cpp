@@ -55,6 +55,20 @@ Periodogram welch(const Eigen::VectorXd& series, double sample_period, Eigen::In
   return average;
 }
 
+Eigen::VectorXd band_component(const Eigen::VectorXd& series, std::size_t low, std::size_t high) {
+  Eigen::FFT<double> fft;
+  std::vector<double> values(series.data(), series.data() + series.size());
+  std::vector<std::complex<double>> spectrum;
+  fft.fwd(spectrum, values);
+  const std::size_t n = values.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t folded = std::min(k, n - k);
+    if (folded < low || folded > high) spectrum[k] = 0.0;
+  }
+  fft.inv(values, spectrum);
+  return Eigen::Map<const Eigen::VectorXd>(values.data(), series.size());
+}
+
 double noise_scale(const Periodogram& p, const std::vector<double>& shape, double above) {
   const std::size_t last = p.power.size() - 1;  // the Nyquist bin, real: not exponential
   // Too close to the Nyquist frequency for a median (a coarse --sample-period): the upper half.

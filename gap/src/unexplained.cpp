@@ -15,9 +15,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
-#include <complex>
 #include <random>
-#include <unsupported/Eigen/FFT>
 
 #include "csp/gap/diagnosis.hpp"
 #include "csp/gap/spectrum.hpp"
@@ -109,6 +107,14 @@ class FittedKinds {
   std::vector<Eigen::Matrix2d> gram_inverse_;
 };
 
+// sin(2 pi f t) and cos(2 pi f t), the columns of a sinusoid at `frequency` in time.
+MatrixXd sinusoid_columns(const VectorXd& t, double frequency) {
+  MatrixXd A(t.size(), 2);
+  A.col(0) = (2.0 * M_PI * frequency * t).array().sin();
+  A.col(1) = (2.0 * M_PI * frequency * t).array().cos();
+  return A;
+}
+
 // A residual periodic in time at a frequency the motion itself has is no vibration: it follows the
 // motion (a motion-dependent torque the model lacks). Whether a joint's velocity has at least
 // kMotionShare of its variance in a sinusoid at `frequency` (over a short part the frequency
@@ -116,9 +122,7 @@ class FittedKinds {
 constexpr double kMotionShare = 0.1;
 bool motion_at(const Samples& s, const VectorXd& t, double frequency) {
   const auto n = t.size();
-  MatrixXd A(n, 2);
-  A.col(0) = (2.0 * M_PI * frequency * t).array().sin();
-  A.col(1) = (2.0 * M_PI * frequency * t).array().cos();
+  const MatrixXd A = sinusoid_columns(t, frequency);
   const auto qr = A.colPivHouseholderQr();
   for (int i = 0; i < kNumJoints; ++i) {
     VectorXd dq(n);
@@ -132,26 +136,9 @@ bool motion_at(const Samples& s, const VectorXd& t, double frequency) {
 
 // The least-squares sinusoid at `frequency` in time: its captured energy and torque.
 double sinusoid_capture(const VectorXd& t, const VectorXd& r, double frequency, VectorXd& torque) {
-  MatrixXd A(t.size(), 2);
-  A.col(0) = (2.0 * M_PI * frequency * t).array().sin();
-  A.col(1) = (2.0 * M_PI * frequency * t).array().cos();
+  const MatrixXd A = sinusoid_columns(t, frequency);
   torque = A * A.colPivHouseholderQr().solve(r);
   return torque.dot(r);
-}
-
-// The part of r in the DFT bins low..high (and their negative-frequency twins).
-VectorXd band_component(const VectorXd& r, std::size_t low, std::size_t high) {
-  Eigen::FFT<double> fft;
-  std::vector<double> series(r.data(), r.data() + r.size());
-  std::vector<std::complex<double>> spectrum;
-  fft.fwd(spectrum, series);
-  const std::size_t n = series.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t folded = std::min(k, n - k);
-    if (folded < low || folded > high) spectrum[k] = 0.0;
-  }
-  fft.inv(series, spectrum);
-  return Eigen::Map<const VectorXd>(series.data(), r.size());
 }
 
 // The bands of r's spectrum above the floor `level`: a bin more than ln(bins / kBandFalseAlarm)
@@ -335,10 +322,7 @@ void shared_modes(std::vector<UnexplainedStructure>& structures, const std::arra
   for (UnexplainedStructure& u : structures) {
     if (!spectral(u)) continue;
     // Each joint's phase at the peak: its residual's least-squares a sin(w t) + b cos(w t) = A sin(w t + phi).
-    const double w = 2.0 * M_PI * u.value;
-    MatrixXd A(t.size(), 2);
-    A.col(0) = (w * t).array().sin(), A.col(1) = (w * t).array().cos();
-    const auto qr = A.colPivHouseholderQr();
+    const auto qr = sinusoid_columns(t, u.value).colPivHouseholderQr();
     auto phase = [&](int joint) {
       const Eigen::Vector2d ab = qr.solve(residuals[static_cast<std::size_t>(joint - 1)]);
       return std::atan2(ab[1], ab[0]) * 180.0 / M_PI;

@@ -31,6 +31,10 @@ Periodogram periodogram(const Eigen::VectorXd& series, double sample_period, int
 // series, which one window over the whole series, weighting its middle, does not.
 Periodogram welch(const Eigen::VectorXd& series, double sample_period, Eigen::Index segment);
 
+// The part of a series in its DFT bins low..high (and their negative-frequency twins): a band-pass
+// with a sharp edge, zero phase.
+Eigen::VectorXd band_component(const Eigen::VectorXd& series, std::size_t low, std::size_t high);
+
 // The scale c of a noise floor c shape[k] (shape: the expected bins of a unit noise), measured at
 // `above` [Hz] and beyond, where the motion has no power (the excitation ends at about 2 Hz): the
 // median of power / shape over those bins, divided by ln 2 (a bin of Gaussian noise is exponentially
