@@ -7,7 +7,7 @@
 // Works unchanged on vcan0 (csp can serve) or a physical interface (can0).
 //   build/apps/csp can serve --iface vcan0 &
 //   build/bridge/can/csp_can_joint_impedance --iface vcan0 --cycles 5000
-// Without kernel CAN, in user-mode-linux (docs/can.md, "Your own master without kernel CAN"):
+// Without kernel CAN, on a kernel booted in qemu (docs/can.md, "Your own master without kernel CAN"):
 //   bridge/can/tools/csp-can-sandbox --csp build/apps/csp -- build/bridge/can/csp_can_joint_impedance
 #include <CLI/CLI.hpp>
 
@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
   CLI::App app("Joint impedance control of seven CiA 402 drives over CAN (CST mode)", "csp_can_joint_impedance");
   std::string iface = "vcan0";
   int cycles = 5000;
-  // 10 s: only how long a dead server takes to show; a user-mode-linux guest on a busy machine
+  // 10 s: only how long a dead server takes to show; an emulated guest on a busy machine
   // stalls for far longer than a real bus ever makes a master wait (docs/can.md).
   double amplitude = 0.1, period = 4.0, timeout = 10.0;
   app.add_option("--iface", iface, "CAN interface")->capture_default_str();

@@ -12,7 +12,7 @@ Works unchanged on vcan0 (csp can serve) and on a physical interface (can0):
     build/apps/csp can serve --iface vcan0 &
     python3 bridge/examples/can_joint_impedance.py --iface vcan0 --cycles 5000
 
-Without kernel CAN (no vcan here), in user-mode-linux, one command:
+Without kernel CAN (no vcan here), on a kernel booted in qemu, one command:
 
     bridge/can/tools/csp-can-sandbox --csp build/apps/csp -- /usr/bin/python3 bridge/examples/can_joint_impedance.py
 
@@ -87,7 +87,7 @@ def main():
     parser.add_argument("--cycles", type=int, default=5000)
     parser.add_argument("--amplitude", type=float, default=0.1, help="motion of joints 1 and 4 [rad]")
     parser.add_argument("--period", type=float, default=4.0, help="period of the motion [s]")
-    # 10 s: only how long a dead server takes to show; a user-mode-linux guest on a busy machine
+    # 10 s: only how long a dead server takes to show; an emulated guest on a busy machine
     # stalls for far longer than a real bus ever makes a master wait (docs/can.md).
     parser.add_argument("--timeout", type=float, default=10.0, help="wait for answers [s]")
     args = parser.parse_args()

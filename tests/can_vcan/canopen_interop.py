@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """Interop: the unmodified python-canopen (shared/vendor, MIT; its BaseNode402 CiA 402 master)
-drives `csp can serve` inside user-mode-linux, run as a user runs a master
+drives `csp can serve` inside the sandbox's guest kernel, run as a user runs a master
 (`csp-can-sandbox --here -- canopen_interop.py ...`: the sandbox starts the server), with the
-timeouts docs/can.md gives for user-mode-linux: it reads the start pose by SDO before any SYNC,
+timeouts docs/can.md gives for the guest: it reads the start pose by SDO before any SYNC,
 loads CSP's EDS, maps the PDOs by SDO as a CiA 302 master does, starts the nodes, walks the 402
 state machine with its own `state` setter, sets the modes with its `op_mode` setter and moves the
 arm in CSP and then CST mode. Its cyclic part is a master's usual cycle thread: every RPDO, then
@@ -18,7 +18,7 @@ import threading
 import time
 
 failures = []
-# The timeouts docs/can.md gives for python-canopen in user-mode-linux [s].
+# The timeouts docs/can.md gives for python-canopen in the sandbox's guest [s].
 SDO_RESPONSE_TIMEOUT = 5.0
 STATE_TIMEOUT = 10.0
 
@@ -43,7 +43,7 @@ def main(csp, vendor, work):
         node = canopen.BaseNode402(n, eds)
         network.add_node(node)
         # docs/can.md, "Your own master without kernel CAN": python-canopen's defaults (0.2 to
-        # 0.8 s) are shorter than a user-mode-linux guest's stalls on a busy machine.
+        # 0.8 s) are shorter than an emulated guest's stalls on a busy machine.
         node.sdo.RESPONSE_TIMEOUT = SDO_RESPONSE_TIMEOUT
         node.TIMEOUT_SWITCH_OP_MODE = node.TIMEOUT_SWITCH_STATE_SINGLE = node.TIMEOUT_CHECK_TPDO = STATE_TIMEOUT
         node.TIMEOUT_SWITCH_STATE_FINAL = node.TIMEOUT_RESET_FAULT = STATE_TIMEOUT

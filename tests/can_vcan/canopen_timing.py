@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """How long python-canopen (shared/vendor) waits for `csp can serve` where it runs: the figures
-behind the timeouts docs/can.md gives for user-mode-linux. Not a test (it asserts nothing and is
+behind the timeouts docs/can.md gives for the sandbox's guest. Not a test (it asserts nothing and is
 not in CTest): a measurement, re-run with
 
   bridge/can/tools/csp-can-sandbox --csp build/apps/csp -- /usr/bin/python3 tests/can_vcan/canopen_timing.py build/apps/csp ../shared/vendor

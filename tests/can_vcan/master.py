@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """An independent CANopen master for the vcan test, on python-can only, written from the CiA 301
 (NMT, SDO, SYNC, PDO, EMCY, heartbeat) and CiA 402 (controlword, statusword masks) text, not
-from CSP's encoder. Runs inside user-mode-linux (bridge/can/tools/csp-can-sandbox) against
+from CSP's encoder. Runs inside the sandbox's guest (bridge/can/tools/csp-can-sandbox) against
 `csp can serve`, which it starts itself once its own socket listens.
 
   master.py session  CSP REFERENCE WORK   boot, identity, 402 walk, 1000 CST cycles compared with
