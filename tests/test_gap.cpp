@@ -714,6 +714,7 @@ TEST(GapDiagnosis, JsonContract) {
     EXPECT_NEAR(rms * rms, measured * measured + input * input, 1e-12);
   }
   EXPECT_TRUE(j.at("verdict").at("warnings").is_array());
+  EXPECT_EQ(j.at("verdict").at("drift"), nlohmann::json::array()) << "a constant offset does not drift";
 }
 
 // csp gap end to end: a generated log in, the JSON contract and a report out; bad input -> exit 2.

@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "csp/gap/diagnosis.hpp"
@@ -100,6 +101,9 @@ void names_each_injected_effect(Generator generate, Shows shows, unsigned seeds,
         for (const UnexplainedStructure& u : d.unexplained)
           if (truth != "friction_hysteresis" || u.size > 0.06 || u.joint < 5)
             ADD_FAILURE() << "truth " << truth << ", seed " << seed << ", explained, left: " << u.detail;
+      // Every effect the generator injects is constant along the log: no parameter drifts.
+      for (const EffectDrift& p : d.drifts)
+        ADD_FAILURE() << "truth " << truth << ", seed " << seed << ", a false drift: " << p.detail;
       if (named != shows(truth)) {
         ++misses;
         ADD_FAILURE() << "truth " << truth << ", seed " << seed << ": named " << named << ", expected " << shows(truth);
@@ -244,6 +248,35 @@ TEST(GapBlind, LocalisesAVelocitySensorRippleOnTheModelsSide) {
 }
 TEST(GapBlind, LocalisesARingingAfterReversals) {
   localises_what_no_library_effect_explains(generate_log, "reversal_ringing", kOutsideSeeds);
+}
+
+// Friction that falls by 2 % per second of each log (the grease warming; each part a 10 s log from
+// t = 0): named joint_friction, whose torque drifts down on most joints; nothing else drifts.
+TEST(GapBlind, ReportsAFrictionThatDrifts) {
+  const Model model = diagnosing_model();
+  InjectedEffects truth = realistic_effect("joint_friction", model, 2);
+  truth.friction_trend = -0.02;
+  const Diagnosis d = diagnose_blind(model, truth, 2, generate_log);
+  EXPECT_EQ(verdict(d), "joint_friction");
+  std::set<int> falling;
+  for (const EffectDrift& p : d.drifts) {
+    std::cout << p.detail << '\n';
+    EXPECT_EQ(p.effect, "joint_friction") << p.detail;
+    ASSERT_EQ(p.gains.size(), 2u * kDriftStretches);
+    // The truth's change over the stretches' span, 9/10 of the 10 s: -0.02 x 9 s = -18 %.
+    EXPECT_NEAR(p.change, -0.18, 0.06) << p.detail;
+    falling.insert(p.joint);
+  }
+  EXPECT_GE(falling.size(), 4u) << "joints whose friction torque falls";
+  // The JSON contract: one entry per drift, each with its gains over the 20 stretches.
+  const nlohmann::json drift = to_json(d).at("verdict").at("drift");
+  ASSERT_EQ(drift.size(), d.drifts.size());
+  for (const auto& entry : drift) {
+    EXPECT_EQ(entry.at("gains").size(), 2u * kDriftStretches);
+    EXPECT_EQ(entry.at("times").size(), 2u * kDriftStretches);
+    EXPECT_LT(entry.at("p_value").get<double>(), kDriftFalseAlarm);
+    EXPECT_TRUE(entry.at("detail").is_string() && entry.at("effect").is_string());
+  }
 }
 
 // A push on one joint for 0.8 s in the held-out log (on the dynamics core, fast enough to run

@@ -567,6 +567,88 @@ std::vector<std::string> physical_warnings(const Model& model, const Diagnosis& 
   return warnings;
 }
 
+// Two-sided tail of Student's t with an even number nu of degrees of freedom, in closed form
+// (Abramowitz and Stegun 26.7.3): with x = t / sqrt(nu + t^2),
+// P(|T| > t) = 1 - x sum_{k < nu/2} c_k (1 - x^2)^k, c_0 = 1, c_k = c_{k-1} (2k - 1) / (2k).
+double student_t_tail(double t, int nu) {
+  const double x = std::abs(t) / std::sqrt(nu + t * t);
+  double sum = 0.0, c = 1.0, power = 1.0;
+  for (int k = 0; k < nu / 2; ++k) {
+    if (k > 0) c *= (2.0 * k - 1.0) / (2.0 * k), power *= 1.0 - x * x;
+    sum += c * power;
+  }
+  return std::max(0.0, 1.0 - x * sum);
+}
+
+// Drift (docs/gap.md, "Drift"): along each part, in kDriftStretches equal stretches, each cause's
+// gain on each joint: the least-squares scale of its verdict torque that fits what the other causes
+// leave there (1: as fitted on the whole). The gains against the stretches' mid-times: a weighted
+// line (weights: the cause's torque energy in the stretch, the inverse of a gain's variance), its
+// slope's t against the gains' scatter about the line, which holds what a stretch's own motion and
+// noise do to a gain: no model of the fit's errors is needed. A gain, not refitted parameters: a
+// law's parameters trade off against each other on a short stretch (Gaz's phi1 and phi2) while the
+// torque they give is well determined.
+std::vector<EffectDrift> effect_drift(const EffectSet& selected, const Part& train, const Part& heldout,
+                                      const VectorXd& theta) {
+  const double tests = static_cast<double>(selected.size() * kNumJoints);
+  std::vector<EffectDrift> drifts;
+  Eigen::Index offset = 0;
+  for (const Effect* effect : selected) {
+    // Per stretch and joint: the cause's torque energy and its gain.
+    std::vector<double> times;
+    std::vector<Vector7> energy, gain;
+    for (const Part* part : {&train, &heldout}) {
+      const VectorXd own = effect->torque(*part, theta.segment(offset, effect->size()));
+      const VectorXd target = part->residual - set_torque(selected, *part, theta) + own;
+      const std::size_t n = part->samples.size();
+      for (int w = 0; w < kDriftStretches; ++w) {
+        const std::size_t first = n * static_cast<std::size_t>(w) / kDriftStretches,
+                          last = n * static_cast<std::size_t>(w + 1) / kDriftStretches;
+        if (last - first < 16) return {};
+        Vector7 e = Vector7::Zero(), g = Vector7::Zero();
+        for (std::size_t k = first; k < last; ++k) {
+          const auto at = static_cast<Eigen::Index>(kNumJoints * k);
+          e += own.segment<kNumJoints>(at).cwiseAbs2();
+          g += own.segment<kNumJoints>(at).cwiseProduct(target.segment<kNumJoints>(at));
+        }
+        times.push_back(0.5 * (part->samples.t[first] + part->samples.t[last - 1]));
+        energy.push_back(e), gain.push_back(g.cwiseQuotient(e.cwiseMax(1e-300)));
+      }
+    }
+    offset += effect->size();
+    const auto m = static_cast<Eigen::Index>(times.size());
+    const double earliest = *std::min_element(times.begin(), times.end()),
+                 latest = *std::max_element(times.begin(), times.end());
+    const double samples = static_cast<double>(train.samples.size() + heldout.samples.size());
+    for (int j = 0; j < kNumJoints; ++j) {
+      VectorXd t(m), g(m), w(m);
+      for (Eigen::Index i = 0; i < m; ++i) {
+        const auto s = static_cast<std::size_t>(i);
+        t[i] = times[s], g[i] = gain[s][j], w[i] = energy[s][j];
+      }
+      // A cause that does next to nothing on this joint has no gain to follow.
+      if (std::sqrt(w.sum() / samples) < kUnexplainedSize) continue;
+      const double t_mean = w.dot(t) / w.sum(), g_mean = w.dot(g) / w.sum();
+      const VectorXd dt = t.array() - t_mean;
+      const double spread = w.dot(dt.cwiseAbs2()), slope = w.dot(dt.cwiseProduct((g.array() - g_mean).matrix())) / spread;
+      const VectorXd off = g.array() - g_mean - slope * dt.array();
+      const double scatter = w.dot(off.cwiseAbs2()) / static_cast<double>(m - 2);
+      const double p = student_t_tail(slope / std::sqrt(std::max(scatter / spread, 1e-300)), static_cast<int>(m) - 2);
+      const double change = slope * (latest - earliest);
+      if (p * tests >= kDriftFalseAlarm || std::abs(change) < kDriftChange) continue;
+      EffectDrift d{effect->name(), j + 1, times, std::vector<double>(g.data(), g.data() + m), 60.0 * slope, change, p,
+                    ""};
+      d.detail = format("%s on joint %d drifts: its torque x%.2f -> x%.2f of the verdict's over the log (%+.0f %% per "
+                        "minute, p = %.1e): look for what changes (temperature, wear, a loosening), or diagnose parts "
+                        "of the log apart",
+                        d.effect.c_str(), d.joint, g_mean + slope * (earliest - t_mean),
+                        g_mean + slope * (latest - t_mean), 100.0 * d.per_minute, p);
+      drifts.push_back(std::move(d));
+    }
+  }
+  return drifts;
+}
+
 }  // namespace
 
 Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog& heldout_log,
@@ -658,6 +740,8 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   std::stable_sort(d.unexplained.begin(), d.unexplained.end(),
                    [](const auto& a, const auto& b) { return a.size > b.size; });
   d.warnings = physical_warnings(model, d);
+  report(options.progress, "refitting the causes on stretches (drift)", 0, 0);
+  if (!selected.empty()) d.drifts = effect_drift(selected, selection_train, selection_heldout, theta);
   return d;
 }
 
@@ -707,6 +791,16 @@ nlohmann::json to_json(const Diagnosis& d) {
                            {"mode_joints", u.mode_joints},
                            {"mode_phase_deg", u.mode_phase_deg},
                            {"detail", u.detail}});
+  nlohmann::json drifts = nlohmann::json::array();
+  for (const EffectDrift& p : d.drifts)
+    drifts.push_back({{"effect", p.effect},
+                      {"joint", p.joint},
+                      {"times", p.times},
+                      {"gains", p.gains},
+                      {"per_minute", p.per_minute},
+                      {"change", p.change},
+                      {"p_value", p.p_value},
+                      {"detail", p.detail}});
   nlohmann::json floor = nlohmann::json::array();
   for (int j = 0; j < kNumJoints; ++j) {
     const NoiseFloor& f = d.noise_floor[static_cast<std::size_t>(j)];
@@ -724,6 +818,7 @@ nlohmann::json to_json(const Diagnosis& d) {
                       {"rest", d.unexplained_rest}}},
                     {"noise_floor", floor},
                     {"warnings", d.warnings},
+                    {"drift", drifts},
                     {"params", d.verdict_params},
                     {"selection", steps}};
   nlohmann::json where = nlohmann::json::array();

@@ -119,7 +119,7 @@ Vector7 velocity_sensor_error(const InjectedEffects& truth, double t) {
 
 InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b) {
   InjectedEffects m = a;
-  if (b.friction.type != FrictionModel::Type::kNone) m.friction = b.friction;
+  if (b.friction.type != FrictionModel::Type::kNone) m.friction = b.friction, m.friction_trend = b.friction_trend;
   m.sensor_offset += b.sensor_offset;
   if (b.payload.mass > 0.0) m.payload = b.payload;
   m.armature += b.armature;
@@ -252,7 +252,8 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
     log.dq.push_back(dq + velocity_sensor_error(truth, t) + noise(Vector7::Constant(options.velocity_noise)));
     trajectory.state(t - truth.delay, q, dq, ddq);  // the torque the sensor reports now
     rnea(true_model, data, q, dq, ddq, rigid);
-    Vector7 tau = rigid + friction_torque(p.friction, dq) + friction_torque(truth.friction, dq) +
+    const double friction_scale = 1.0 + truth.friction_trend * t;
+    Vector7 tau = rigid + friction_torque(p.friction, dq) + friction_scale * friction_torque(truth.friction, dq) +
                   truth.armature.cwiseProduct(ddq) + injected(t - truth.delay, q, dq, rigid);
     for (int j = 0; j < kNumJoints; ++j)
       tau[j] += stribeck_excess(truth.breakaway_excess[j], truth.stribeck_velocity, dq[j]);

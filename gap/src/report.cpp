@@ -82,6 +82,9 @@ std::string finding(const Diagnosis& d) {
                   robot->size, robot->floor_multiple, advice(*robot).c_str());
   }
   for (const std::string& w : d.warnings) out += " Not physical: " + w + ".";
+  if (!d.drifts.empty())
+    out += format(" %zu cause(s) and joint(s) drift along the log, first: %s.", d.drifts.size(),
+                  d.drifts.front().detail.c_str());
   return out;
 }
 
@@ -114,6 +117,7 @@ std::string summary(const Diagnosis& d) {
   for (const NoiseFloor& f : d.noise_floor) out += format(" %.3f/%.3f", f.measured_rms, f.model_input_rms);
   out += "\n";
   for (const std::string& w : d.warnings) out += "warning: " + w + "\n";
+  for (const EffectDrift& p : d.drifts) out += "drift: " + p.detail + "\n";
   return out;
 }
 
@@ -204,6 +208,7 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
                100 * d.unexplained_fraction, 100 * d.unexplained_noise, 100 * d.unexplained_model_input,
                100 * d.unexplained_rest);
   for (const std::string& w : d.warnings) md += "**Not physical:** " + w + ".\n\n";
+  for (const EffectDrift& p : d.drifts) md += "**Drift:** " + p.detail + ".\n\n";
   for (const UnexplainedStructure& u : d.unexplained) md += "- " + u.detail + "\n";
   if (!d.unexplained.empty()) md += "\n![unexplained](unexplained.svg)\n\n";
   md += "![torque](torque_heldout.svg)\n\n## Effects, each alone\n\n";

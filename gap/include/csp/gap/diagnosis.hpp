@@ -95,6 +95,24 @@ struct Transient {
   double share = 0.0;            // of that joint's mean square left in its part
 };
 
+// A cause whose size changes along the log (docs/gap.md, "Drift"): in kDriftStretches stretches of
+// each part, each cause's gain on each joint (the scale of its verdict torque that fits there; 1 = as
+// on the whole); a gain that follows a line in time beyond its scatter about it (Student's t,
+// two-sided, below kDriftFalseAlarm over all causes and joints) and changes by at least kDriftChange
+// over the log drifts.
+inline constexpr int kDriftStretches = 10;          // per part (20 in all: the line has 18 degrees of freedom)
+inline constexpr double kDriftFalseAlarm = 1e-3;    // per diagnosis (Bonferroni over causes and joints)
+inline constexpr double kDriftChange = 0.1;         // [-] of the gain, over the log
+struct EffectDrift {
+  std::string effect;                 // the cause
+  int joint = 0;                      // 1-based
+  std::vector<double> times, gains;   // each stretch's mid-time [s] and the cause's torque gain there
+  double per_minute = 0.0;            // the line's slope [1/min]
+  double change = 0.0;                // the line's change over the stretches' span
+  double p_value = 1.0;               // of a slope this large by chance
+  std::string detail;                 // one plain sentence
+};
+
 struct Diagnosis {
   Part train, heldout;
   Vector7 baseline_train_rms = Vector7::Zero(), baseline_heldout_rms = Vector7::Zero();
@@ -114,6 +132,7 @@ struct Diagnosis {
   // torque's noise floor; the model's input (its noise floor and its bands above the floor); the rest.
   double unexplained_noise = 0.0, unexplained_model_input = 0.0, unexplained_rest = 0.0;
   std::vector<std::string> warnings;              // fits that are not physical (docs/gap.md)
+  std::vector<EffectDrift> drifts;                // the causes whose size changes along the log
 };
 
 // The residual `left` (stacked, on `part`) after the verdict: its noise floor per joint and its

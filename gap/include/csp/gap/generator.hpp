@@ -31,6 +31,7 @@ struct InjectedEffects {
   double presliding_distance = 0.02;                              // [rad]
   Vector7 load_friction = Vector7::Zero();                        // friction per N m transmitted
   Vector7 drift_rate = Vector7::Zero();                           // sensor offset drift [N m/s]
+  double friction_trend = 0.0;  // the added friction scales by 1 + friction_trend t [1/s] (warming grease)
   // Outside every library effect on purpose (the check that the diagnosis names no false cause and
   // localises what it cannot name): a structural vibration of one joint, its amplitude constant, or
   // following the configuration (times 1 + vibration_configuration cos(2 q2): the arm's stiffness
