@@ -194,7 +194,7 @@ ModelParameters truth_parameters(const Model& model, const InjectedEffects& trut
 
 bool InjectedJointTorque::present(const InjectedEffects& truth) {
   return !truth.ripple_amplitude.isZero() || !truth.hysteresis_amplitude.isZero() || !truth.load_friction.isZero() ||
-         truth.vibration_joint != 0 || truth.ringing_joint != 0;
+         truth.vibration_joint != 0 || truth.ringing_joint != 0 || truth.friction_trend != 0.0;
 }
 
 Vector7 InjectedJointTorque::operator()(double t, const Vector7& q, const Vector7& dq, const Vector7& tau_transmitted) {
@@ -215,6 +215,9 @@ Vector7 InjectedJointTorque::operator()(double t, const Vector7& q, const Vector
     tau[j] += truth_.ringing_amplitude * std::exp(-since / truth_.ringing_decay) *
               std::sin(2.0 * M_PI * truth_.ringing_frequency * since);
   }
+  // The added friction's change since the log began (on the emulated robot, its plant's friction is
+  // the added one at t = 0).
+  tau += truth_.friction_trend * t * friction_torque(truth_.friction, dq);
   started_ = true;
   q_previous_ = q;
   if (truth_.vibration_joint) {
@@ -252,8 +255,7 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
     log.dq.push_back(dq + velocity_sensor_error(truth, t) + noise(Vector7::Constant(options.velocity_noise)));
     trajectory.state(t - truth.delay, q, dq, ddq);  // the torque the sensor reports now
     rnea(true_model, data, q, dq, ddq, rigid);
-    const double friction_scale = 1.0 + truth.friction_trend * t;
-    Vector7 tau = rigid + friction_torque(p.friction, dq) + friction_scale * friction_torque(truth.friction, dq) +
+    Vector7 tau = rigid + friction_torque(p.friction, dq) + friction_torque(truth.friction, dq) +
                   truth.armature.cwiseProduct(ddq) + injected(t - truth.delay, q, dq, rigid);
     for (int j = 0; j < kNumJoints; ++j)
       tau[j] += stribeck_excess(truth.breakaway_excess[j], truth.stribeck_velocity, dq[j]);

@@ -70,8 +70,8 @@ InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b);
 ModelParameters truth_parameters(const Model& model, const InjectedEffects& truth);
 
 // The injected effects that are physical joint torques beyond a rigid-body model with sliding and
-// static friction: position ripple, Dahl hysteresis, load-dependent friction and the outside-library
-// vibration. Both generators use it: the dynamics core's adds it to the truth's inverse dynamics, the
+// static friction: position ripple, Dahl hysteresis, load-dependent friction, the added friction's
+// trend and the outside-library vibration. Both generators use it: the dynamics core's adds it to the truth's inverse dynamics, the
 // emulated robot's plant takes it as its extra joint torque (csp::rt::PlantTorque). Allocation-free.
 class InjectedJointTorque {
  public:
