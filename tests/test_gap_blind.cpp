@@ -101,7 +101,7 @@ void names_each_injected_effect(Generator generate, Shows shows, unsigned seeds,
         for (const UnexplainedStructure& u : d.unexplained)
           if (truth != "friction_hysteresis" || u.size > 0.06 || u.joint < 5)
             ADD_FAILURE() << "truth " << truth << ", seed " << seed << ", explained, left: " << u.detail;
-      // Every effect the generator injects is constant along the log: no parameter drifts.
+      // Every effect the generator injects is constant along the log: no cause drifts.
       for (const EffectDrift& p : d.drifts)
         ADD_FAILURE() << "truth " << truth << ", seed " << seed << ", a false drift: " << p.detail;
       if (named != shows(truth)) {

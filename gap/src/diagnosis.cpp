@@ -630,7 +630,8 @@ std::vector<EffectDrift> effect_drift(const EffectSet& selected, const Part& tra
       if (std::sqrt(w.sum() / samples) < kUnexplainedSize) continue;
       const double t_mean = w.dot(t) / w.sum(), g_mean = w.dot(g) / w.sum();
       const VectorXd dt = t.array() - t_mean;
-      const double spread = w.dot(dt.cwiseAbs2()), slope = w.dot(dt.cwiseProduct((g.array() - g_mean).matrix())) / spread;
+      const double spread = w.dot(dt.cwiseAbs2());
+      const double slope = w.dot(dt.cwiseProduct((g.array() - g_mean).matrix())) / spread;
       const VectorXd off = g.array() - g_mean - slope * dt.array();
       const double scatter = w.dot(off.cwiseAbs2()) / static_cast<double>(m - 2);
       const double p = student_t_tail(slope / std::sqrt(std::max(scatter / spread, 1e-300)), static_cast<int>(m) - 2);
@@ -740,7 +741,7 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   std::stable_sort(d.unexplained.begin(), d.unexplained.end(),
                    [](const auto& a, const auto& b) { return a.size > b.size; });
   d.warnings = physical_warnings(model, d);
-  report(options.progress, "refitting the causes on stretches (drift)", 0, 0);
+  report(options.progress, "the causes' gains along the log (drift)", 0, 0);
   if (!selected.empty()) d.drifts = effect_drift(selected, selection_train, selection_heldout, theta);
   return d;
 }
