@@ -591,15 +591,19 @@ double student_t_tail(double t, int nu) {
 std::vector<EffectDrift> effect_drift(const EffectSet& selected, const Part& train, const Part& heldout,
                                       const VectorXd& theta) {
   const double tests = static_cast<double>(selected.size() * kNumJoints);
+  const std::array<const Part*, 2> parts = {&train, &heldout};
+  const std::array<VectorXd, 2> left = {train.residual - set_torque(selected, train, theta),
+                                        heldout.residual - set_torque(selected, heldout, theta)};
   std::vector<EffectDrift> drifts;
   Eigen::Index offset = 0;
   for (const Effect* effect : selected) {
     // Per stretch and joint: the cause's torque energy and its gain.
     std::vector<double> times;
     std::vector<Vector7> energy, gain;
-    for (const Part* part : {&train, &heldout}) {
+    for (std::size_t which = 0; which < parts.size(); ++which) {
+      const Part* part = parts[which];
       const VectorXd own = effect->torque(*part, theta.segment(offset, effect->size()));
-      const VectorXd target = part->residual - set_torque(selected, *part, theta) + own;
+      const VectorXd target = left[which] + own;
       const std::size_t n = part->samples.size();
       for (int w = 0; w < kDriftStretches; ++w) {
         const std::size_t first = n * static_cast<std::size_t>(w) / kDriftStretches,
@@ -627,7 +631,8 @@ std::vector<EffectDrift> effect_drift(const EffectSet& selected, const Part& tra
         t[i] = times[s], g[i] = gain[s][j], w[i] = energy[s][j];
       }
       // A cause that does next to nothing on this joint has no gain to follow.
-      if (std::sqrt(w.sum() / samples) < kUnexplainedSize) continue;
+      const double size = std::sqrt(w.sum() / samples);
+      if (size < kUnexplainedSize) continue;
       const double t_mean = w.dot(t) / w.sum(), g_mean = w.dot(g) / w.sum();
       const VectorXd dt = t.array() - t_mean;
       const double spread = w.dot(dt.cwiseAbs2());
@@ -636,7 +641,12 @@ std::vector<EffectDrift> effect_drift(const EffectSet& selected, const Part& tra
       const double scatter = w.dot(off.cwiseAbs2()) / static_cast<double>(m - 2);
       const double p = student_t_tail(slope / std::sqrt(std::max(scatter / spread, 1e-300)), static_cast<int>(m) - 2);
       const double change = slope * (latest - earliest);
-      if (p * tests >= kDriftFalseAlarm || std::abs(change) < kDriftChange) continue;
+      // Significant, and large enough to matter: by kDriftChange of the cause, and by as much torque as
+      // a structure left unexplained must have (one pass of a motion that does not repeat ties time to
+      // configuration: a small cause's gain can follow what the others leave along the path).
+      if (p * tests >= kDriftFalseAlarm || std::abs(change) < kDriftChange ||
+          std::abs(change) * size < kUnexplainedSize)
+        continue;
       EffectDrift d{effect->name(), j + 1, times, std::vector<double>(g.data(), g.data() + m), 60.0 * slope, change, p,
                     ""};
       d.detail = format("%s on joint %d drifts: its torque x%.2f -> x%.2f of the verdict's over the log (%+.0f %% per "
