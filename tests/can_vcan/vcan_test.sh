@@ -71,10 +71,14 @@ part "--split 4: the joints over vcan0..vcan3, each bus with its own nodes, its 
 candump -L any > "$W/split.candump" &
 dump=$!
 sleep 0.3
-"$CSP_BIN" can serve --iface vcan0 --split 4 --sync-producer --duration 0.3 > "$W/split.out" 2>&1 &
+"$CSP_BIN" can serve --iface vcan0 --split 4 --sync-producer --duration 600 > "$W/split.out" 2>&1 &
 serve=$!
 for i in $(seq 600); do grep -q "vcan3 707#00" "$W/split.candump" && break; sleep 0.1; done
 for i in 0 1 2 3; do cansend vcan$i 000#0100; done
+# Stopped once node 7 has sent 200 TPDO1s, not after a fixed robot time: a slow guest may start
+# the nodes only after a short run has ended.
+for i in $(seq 600); do [ "$(grep -c "vcan3 187#" "$W/split.candump")" -ge 200 ] && break; sleep 0.1; done
+kill -INT $serve
 wait $serve || fail "split: csp can serve"
 sleep 0.3
 kill $dump
