@@ -58,15 +58,16 @@ bool solve_case(const Matrix7& M, const Vector7& M_v_free, const Vector7& bound,
 }  // namespace
 
 // Gaz et al. 2019, eq. (10) as in their code: a sigmoid in dq shifted so that tau_f(0) = 0.
-double gaz_friction(double phi1, double phi2, double phi3, double dq) {
-  return phi1 / (1.0 + std::exp(-phi2 * (dq + phi3))) - phi1 / (1.0 + std::exp(-phi2 * phi3));
-}
+double gaz_friction(double phi1, double phi2, double phi3, double dq) { return GazFriction(phi1, phi2, phi3)(dq); }
+
+GazFriction::GazFriction(double phi1, double phi2, double phi3)
+    : phi1_(phi1), phi2_(phi2), phi3_(phi3), s0_(logistic(phi2 * phi3)), rest_(phi1 / (1.0 + std::exp(-phi2 * phi3))) {}
 
 // With s(x) = 1/(1+exp(-x)), s' = s (1 - s), s1 = s(phi2 (dq+phi3)) and s0 = s(phi2 phi3).
-GazFrictionGradient gaz_friction_gradient(double phi1, double phi2, double phi3, double dq) {
-  const double s1 = 1.0 / (1.0 + std::exp(-phi2 * (dq + phi3))), s0 = 1.0 / (1.0 + std::exp(-phi2 * phi3));
-  const double ds1 = s1 * (1.0 - s1), ds0 = s0 * (1.0 - s0);
-  return {s1 - s0, phi1 * (ds1 * (dq + phi3) - ds0 * phi3), phi1 * phi2 * (ds1 - ds0)};
+GazFrictionGradient GazFriction::gradient(double dq) const {
+  const double s1 = logistic(phi2_ * (dq + phi3_));
+  const double ds1 = s1 * (1.0 - s1), ds0 = s0_ * (1.0 - s0_);
+  return {s1 - s0_, phi1_ * (ds1 * (dq + phi3_) - ds0 * phi3_), phi1_ * phi2_ * (ds1 - ds0)};
 }
 
 double stribeck_level(double breakaway, double stribeck_velocity, double dq) {

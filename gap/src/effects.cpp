@@ -204,27 +204,34 @@ class JointFriction : public Effect {
   std::string name() const override { return "joint_friction"; }
   int size() const override { return 4 * kNumJoints; }
 
+  // friction_law, with each joint's sigmoid built once for all its samples.
   VectorXd torque(const Part& part, const VectorXd& theta) const override {
     VectorXd tau(part.rows());
-    for (Eigen::Index r = 0; r < part.rows(); ++r) {
-      const int j = static_cast<int>(r % kNumJoints);
-      const double dq = part.samples.dq[r / kNumJoints][j];
-      tau[r] = friction_law(theta[4 * j], std::exp(theta[4 * j + 1]), theta[4 * j + 2], theta[4 * j + 3], dq);
+    for (int j = 0; j < kNumJoints; ++j) {
+      const GazFriction sigmoid = law(theta, j);
+      const double viscous = theta[4 * j + 3];
+      for (std::size_t k = 0; k < part.samples.size(); ++k) {
+        const double dq = part.samples.dq[k][j];
+        tau[rows_of(static_cast<int>(k)) + j] = sigmoid(dq) + viscous * dq;
+      }
     }
     return tau;
   }
 
   MatrixXd jacobian(const Part& part, const VectorXd& theta) const override {
     MatrixXd J = MatrixXd::Zero(part.rows(), size());
-    for (Eigen::Index r = 0; r < part.rows(); ++r) {
-      const int j = static_cast<int>(r % kNumJoints);
-      const double dq = part.samples.dq[r / kNumJoints][j];
+    for (int j = 0; j < kNumJoints; ++j) {
+      const GazFriction sigmoid = law(theta, j);
       const double phi2 = std::exp(theta[4 * j + 1]);
-      const GazFrictionGradient gradient = gaz_friction_gradient(theta[4 * j], phi2, theta[4 * j + 2], dq);
-      J(r, 4 * j) = gradient.phi1;
-      J(r, 4 * j + 1) = phi2 * gradient.phi2;   // d/d(ln phi2) = phi2 d/dphi2
-      J(r, 4 * j + 2) = gradient.phi3;
-      J(r, 4 * j + 3) = dq;
+      for (std::size_t k = 0; k < part.samples.size(); ++k) {
+        const Eigen::Index r = rows_of(static_cast<int>(k)) + j;
+        const double dq = part.samples.dq[k][j];
+        const GazFrictionGradient gradient = sigmoid.gradient(dq);
+        J(r, 4 * j) = gradient.phi1;
+        J(r, 4 * j + 1) = phi2 * gradient.phi2;   // d/d(ln phi2) = phi2 d/dphi2
+        J(r, 4 * j + 2) = gradient.phi3;
+        J(r, 4 * j + 3) = dq;
+      }
     }
     return J;
   }
@@ -239,9 +246,10 @@ class JointFriction : public Effect {
         for (double phi3 = -0.1; phi3 < 0.1001; phi3 += 0.025) {
           Eigen::MatrixX2d A(n, 2);
           VectorXd b(n);
+          const GazFriction unit_sigmoid(1.0, std::exp(log_phi2), phi3);
           for (Eigen::Index k = 0; k < n; ++k) {
             const double dq = part.samples.dq[k][j];
-            A(k, 0) = friction_law(1.0, std::exp(log_phi2), phi3, 0.0, dq);
+            A(k, 0) = unit_sigmoid(dq);
             A(k, 1) = dq;
             b[k] = target[kNumJoints * k + j];
           }
@@ -264,6 +272,11 @@ class JointFriction : public Effect {
             {"phi3_rad_per_s_sigma", values(sigma, 2, kNumJoints, 4)},
             {"viscous_Nms_per_rad", values(theta, 3, kNumJoints, 4)},
             {"viscous_Nms_per_rad_sigma", values(sigma, 3, kNumJoints, 4)}};
+  }
+
+ private:
+  static GazFriction law(const VectorXd& theta, int j) {
+    return GazFriction(theta[4 * j], std::exp(theta[4 * j + 1]), theta[4 * j + 2]);
   }
 };
 

@@ -23,6 +23,10 @@ case $? in
   132) echo "FAIL  $CSP_BIN stops on an illegal instruction in the guest: build with -DCSP_NATIVE=OFF -DCMAKE_CXX_FLAGS=-march=x86-64-v3"; exit 1 ;;
   *) cat "$W/demo.out"; echo "FAIL  csp demo"; exit 1 ;;
 esac
+# Waits until a recorder (candump) writing to FILE has caught up: its size unchanged
+# for a second (at most a minute). A slow guest schedules it late, and it must not be stopped with
+# frames still queued in its socket.
+settled() { last=-1; for i in $(seq 60); do size=$(wc -c < "$1"); [ "$size" = "$last" ] && return; last=$size; sleep 1; done; }
 # A master as a user runs it: csp-can-sandbox starts `csp can serve`, runs the master, stops the
 # server and returns the master's exit code; its files go to $W/$1.
 sandbox() { name=$1; shift; "$CSP_SANDBOX" --here --csp "$CSP_BIN" --work "$W/$name" "$@"; }
@@ -35,6 +39,7 @@ load=$!
 sleep 0.5
 $PY "$M" session "$CSP_BIN" "$CSP_REFERENCE" "$W" || fail "session"
 sleep 2   # canbusload prints once a second: let it print the last traffic
+settled "$W/session.candump"
 kill $dump $load
 
 part "canbusload vcan0@1000000 vs csp can serve's own figure"
@@ -51,6 +56,7 @@ for i in $(seq 600); do grep -q "707#00" "$W/replay.candump" && break; sleep 0.1
 canplayer -I "$W/master.candump" || fail "canplayer"
 sleep 1
 kill -INT $serve; wait $serve
+settled "$W/replay.candump"
 kill $dump
 $PY "$M" replay-compare "$W" || fail "replay"
 
@@ -80,7 +86,7 @@ for i in 0 1 2 3; do cansend vcan$i 000#0100; done
 for i in $(seq 600); do [ "$(grep -c "vcan3 187#" "$W/split.candump")" -ge 200 ] && break; sleep 0.1; done
 kill -INT $serve
 wait $serve || fail "split: csp can serve"
-sleep 0.3
+settled "$W/split.candump"
 kill $dump
 cat "$W/split.out"
 $PY "$M" split "$W" || fail "split"

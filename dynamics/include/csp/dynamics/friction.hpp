@@ -2,6 +2,8 @@
 // torque a motor must ADD to move the joint, as in tau = M ddq + c + g + tau_f.
 #pragma once
 
+#include <cmath>
+
 #include "csp/dynamics/spatial.hpp"
 
 namespace csp {
@@ -24,11 +26,23 @@ struct FrictionModel {
 //   tau_f = phi1/(1+exp(-phi2 (dq+phi3))) - phi1/(1+exp(-phi2 phi3)).
 double gaz_friction(double phi1, double phi2, double phi3, double dq);
 
-// Partial derivatives of gaz_friction with respect to its parameters (for fitting them).
+// Partial derivatives of the law with respect to its parameters (for fitting them).
 struct GazFrictionGradient {
   double phi1 = 0.0, phi2 = 0.0, phi3 = 0.0;
 };
-GazFrictionGradient gaz_friction_gradient(double phi1, double phi2, double phi3, double dq);
+
+// The same law for one set of parameters: its rest term phi1 s(phi2 phi3) is computed once, since a fit
+// evaluates the law and its gradient at every sample of a log for each trial of the parameters.
+class GazFriction {
+ public:
+  GazFriction(double phi1, double phi2, double phi3);
+  double operator()(double dq) const { return phi1_ / (1.0 + std::exp(-phi2_ * (dq + phi3_))) - rest_; }
+  GazFrictionGradient gradient(double dq) const;
+
+ private:
+  static double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+  double phi1_, phi2_, phi3_, s0_, rest_;  // rest_ = phi1 s0
+};
 
 // Static friction at sliding speed dq (Stribeck): breakaway exp(-(dq / stribeck_velocity)^2), the
 // Gaussian decay of Armstrong-Helouvry et al. (1994). Its magnitude only: the sign is the motion's,
