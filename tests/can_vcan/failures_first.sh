@@ -4,6 +4,7 @@
 # Usage: failures_first.sh LOG COMMAND [ARGUMENT...]
 log=$1
 shift
+mkdir -p "$(dirname "$log")" || exit 1
 "$@" > "$log" 2>&1
 rc=$?
 echo "exit code $rc; the outline (the whole output follows, and is in $log):"
