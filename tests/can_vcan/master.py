@@ -134,9 +134,17 @@ def rpdo1(controlword, torques=(0,) * 7):
     return [(0x200 + n, struct.pack("<Hh", controlword, torques[n - 1])) for n in NODES]
 
 
+# The master's frames in the order it sends them, as on a real bus: vcan queues each frame on the
+# sending CPU's backlog, so a master moved between the guest's CPUs from one send to the next could
+# have its SYNC delivered before its last RPDO (seen once on CI: a torn cycle, and the lockstep
+# trajectory off by one command). So the master runs on one CPU; the server it starts on all of them.
+ALL_CPUS = os.sched_getaffinity(0)
+
+
 def start_serve(csp, work, name, *extra):
     out = open(os.path.join(work, name + ".out"), "w")
-    return subprocess.Popen([csp, "can", "serve", "--iface", "vcan0", "--duration", "1000", *extra], stdout=out, stderr=subprocess.STDOUT)
+    return subprocess.Popen([csp, "can", "serve", "--iface", "vcan0", "--duration", "1000", *extra], stdout=out,
+                            stderr=subprocess.STDOUT, preexec_fn=lambda: os.sched_setaffinity(0, ALL_CPUS))
 
 
 def stop_serve(serve, work, name):
@@ -398,6 +406,7 @@ def split(work):
 
 
 def main():
+    os.sched_setaffinity(0, {min(ALL_CPUS)})
     command = sys.argv[1]
     if command == "session":
         session(*sys.argv[2:5])
