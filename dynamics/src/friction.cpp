@@ -60,8 +60,12 @@ bool solve_case(const Matrix7& M, const Vector7& M_v_free, const Vector7& bound,
 // Gaz et al. 2019, eq. (10) as in their code: a sigmoid in dq shifted so that tau_f(0) = 0.
 double gaz_friction(double phi1, double phi2, double phi3, double dq) { return GazFriction(phi1, phi2, phi3)(dq); }
 
-GazFriction::GazFriction(double phi1, double phi2, double phi3)
-    : phi1_(phi1), phi2_(phi2), phi3_(phi3), s0_(logistic(phi2 * phi3)), rest_(phi1 / (1.0 + std::exp(-phi2 * phi3))) {}
+// rest_ as phi1 / (1 + e), not phi1 s0: the arithmetic of the law's first form, bit for bit.
+GazFriction::GazFriction(double phi1, double phi2, double phi3) : phi1_(phi1), phi2_(phi2), phi3_(phi3) {
+  const double e = std::exp(-phi2 * phi3);
+  s0_ = 1.0 / (1.0 + e);
+  rest_ = phi1 / (1.0 + e);
+}
 
 // With s(x) = 1/(1+exp(-x)), s' = s (1 - s), s1 = s(phi2 (dq+phi3)) and s0 = s(phi2 phi3).
 GazFrictionGradient GazFriction::gradient(double dq) const {
