@@ -685,6 +685,8 @@ TEST(GapDiagnosis, JsonContract) {
     EXPECT_TRUE(e.at("params").is_object());
     const double f = e.at("explained_fraction");
     EXPECT_TRUE(f >= 0.0 && f <= 1.0);
+    const double low = e.at("explained_fraction_interval")[0], high = e.at("explained_fraction_interval")[1];
+    EXPECT_TRUE(0.0 <= low && low <= high && high <= 1.0) << e.at("name");
     EXPECT_TRUE(e.at("significant").is_boolean());
     for (int joint : e.at("joints")) EXPECT_TRUE(joint >= 1 && joint <= 7);
   }
@@ -702,6 +704,18 @@ TEST(GapDiagnosis, JsonContract) {
   EXPECT_EQ(j.at("verdict").at("heldout_rms_after").size(), 7u);
   const double unexplained = j.at("verdict").at("unexplained_fraction");
   EXPECT_TRUE(unexplained > 0.0 && unexplained < 0.5);
+  const nlohmann::json& interval = j.at("verdict").at("unexplained_fraction_interval");
+  EXPECT_TRUE(interval[0] < interval[1] && interval[0] > 0.0) << interval;
+  // Every fitted number has its block-bootstrap sigma and interval; the offsets' intervals hold the truth.
+  const nlohmann::json& offset = j.at("verdict").at("params").at("sensor_offset");
+  ASSERT_EQ(offset.at("offset_Nm_sigma").size(), 7u);
+  int covered = 0;
+  for (int joint = 0; joint < 7; ++joint) {
+    const double low = offset.at("offset_Nm_interval")[joint][0], high = offset.at("offset_Nm_interval")[joint][1];
+    EXPECT_GT(offset.at("offset_Nm_sigma")[joint].get<double>(), 0.0);
+    covered += low <= truth.sensor_offset[joint] && truth.sensor_offset[joint] <= high;
+  }
+  EXPECT_GE(covered, 6) << offset.dump() << "\ntruth " << truth.sensor_offset.transpose();
   // The split adds up to the unexplained fraction; the floor has both sides on every joint.
   const nlohmann::json& split = j.at("verdict").at("unexplained_split");
   EXPECT_NEAR(split.at("noise").get<double>() + split.at("model_input").get<double>() + split.at("rest").get<double>(),

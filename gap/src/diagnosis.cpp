@@ -12,6 +12,7 @@
 #include <tuple>
 #include <unsupported/Eigen/FFT>
 
+#include "csp/gap/bootstrap.hpp"
 #include "csp/gap/spectrum.hpp"
 #include "csp/io/svg_plot.hpp"
 
@@ -64,7 +65,7 @@ VectorXd without_effect(const EffectSet& set, const VectorXd& theta, const Effec
 }
 
 struct SetFit {
-  VectorXd theta, sigma;
+  VectorXd theta;
   VectorXd train_left, heldout_left;  // residuals after the set: baseline residual - set torque
 };
 
@@ -73,7 +74,7 @@ struct SetFit {
 // squares solution, so the nonlinear fit sees the residual projected off the linear columns);
 // Levenberg-Marquardt with Marquardt's diagonal scaling fits the nonlinear ones.
 SetFit fit_set(const EffectSet& set, const Part& train, const Part& heldout, VectorXd theta) {
-  if (set.empty()) return {VectorXd(0), VectorXd(0), train.residual, heldout.residual};  // the model alone
+  if (set.empty()) return {VectorXd(0), train.residual, heldout.residual};  // the model alone
   EffectSet nonlinear;
   std::vector<Eigen::Index> linear_at, nonlinear_at;  // positions in theta
   std::vector<MatrixXd> linear_columns;
@@ -131,27 +132,25 @@ SetFit fit_set(const EffectSet& set, const Part& train, const Part& heldout, Vec
   }
   theta(nonlinear_at) = phi;
   if (A.cols() > 0) theta(linear_at) = qr.solve(train.residual - set_torque(nonlinear, train, phi));
-  r = train.residual - set_torque(set, train, theta);
-  rss = r.squaredNorm();
-
-  // Covariance sigma^2 (J^T J)^-1 at the optimum; unidentifiable directions give no uncertainty (null).
-  const MatrixXd J = set_jacobian(set, train, theta);
-  const Eigen::SelfAdjointEigenSolver<MatrixXd> normal(J.transpose() * J);
-  const double dof = std::max<double>(1.0, static_cast<double>(J.rows() - J.cols()));
-  VectorXd sigma = VectorXd::Constant(theta.size(), std::numeric_limits<double>::infinity());
-  if (normal.eigenvalues().minCoeff() > 1e-12 * normal.eigenvalues().maxCoeff()) {
-    const MatrixXd covariance = normal.eigenvectors() * normal.eigenvalues().cwiseInverse().asDiagonal() *
-                                normal.eigenvectors().transpose() * (rss / dof);
-    sigma = covariance.diagonal().cwiseSqrt();
-  }
-  return {theta, sigma, r, heldout.residual - set_torque(set, heldout, theta)};
+  return {theta, train.residual - set_torque(set, train, theta), heldout.residual - set_torque(set, heldout, theta)};
 }
 
-nlohmann::json describe_set(const EffectSet& set, const SetFit& fit) {
+// The parameters of a set fitted on `part` (leaving `left`), each with its block-bootstrap standard
+// deviation and interval (docs/gap.md, "Uncertainty").
+nlohmann::json describe_fit(const EffectSet& set, const VectorXd& theta, const Part& part, const VectorXd& left,
+                            unsigned seed) {
   nlohmann::json params = nlohmann::json::object();
+  if (set.empty()) return params;
+  const std::vector<int> blocks = time_blocks(part.samples);
+  const std::vector<VectorXd> replicates = bootstrap_parameters(set_jacobian(set, part, theta), left, blocks, theta, seed);
   Eigen::Index offset = 0;
   for (const Effect* e : set) {
-    params[e->name()] = e->describe(fit.theta.segment(offset, e->size()), fit.sigma.segment(offset, e->size()));
+    nlohmann::json point = e->describe(theta.segment(offset, e->size()));
+    std::vector<nlohmann::json> described;
+    for (const VectorXd& replicate : replicates) described.push_back(e->describe(replicate.segment(offset, e->size())));
+    add_intervals(point, described, blocks.empty() ? 0 : blocks.back() + 1);
+    point.update(e->consistency(theta.segment(offset, e->size())));
+    params[e->name()] = point;
     offset += e->size();
   }
   return params;
@@ -421,7 +420,7 @@ std::pair<EffectSet, SetFit> forward_selection(const std::vector<std::unique_ptr
     return thresholds[size];
   };
   EffectSet selected;
-  SetFit current{VectorXd(0), VectorXd(0), train.residual, heldout.residual};
+  SetFit current{VectorXd(0), train.residual, heldout.residual};
   while (selected.size() < library.size()) {
     thresholds.clear();
     const std::string stage = "selecting cause " + std::to_string(selected.size() + 1);
@@ -454,7 +453,6 @@ std::pair<EffectSet, SetFit> forward_selection(const std::vector<std::unique_ptr
       best = effect, best_result = result, best_fit = fit;
     }
     selected.push_back(best);
-    best_result.params = describe_set(selected, best_fit);
     d.causes.push_back(best->name());
     d.steps.push_back(best_result);
     current = best_fit;
@@ -530,7 +528,7 @@ double number(const nlohmann::json& params, const char* key, std::size_t j, doub
 
 // The verdict's fits that are not physical. Inertial parameters: a mass matrix that is not positive
 // definite, or no set of physical links that realises the fitted base parameters. Friction (the
-// model's own plus the fitted correction): a viscous coefficient below zero by more than two sigma,
+// model's own plus the fitted correction): a viscous coefficient below zero beyond its interval,
 // or a law that drives the motion (torque against the velocity's sign by more than 0.05 N m)
 // somewhere within the log's velocities.
 std::vector<std::string> physical_warnings(const Model& model, const Diagnosis& d) {
@@ -554,9 +552,12 @@ std::vector<std::string> physical_warnings(const Model& model, const Diagnosis& 
       const double phi1 = number(friction, "phi1_Nm", j), phi2 = number(friction, "phi2_s_per_rad", j),
                    phi3 = number(friction, "phi3_rad_per_s", j), viscous = number(friction, "viscous_Nms_per_rad", j);
       const double viscous_total = viscous + (own.type == FrictionModel::Type::kLinear ? own.viscous[joint] : 0.0);
-      if (viscous_total + 2.0 * number(friction, "viscous_Nms_per_rad_sigma", j) < 0.0)
+      const nlohmann::json& interval = friction.at("viscous_Nms_per_rad_interval").at(j);
+      const double highest = interval.is_array() ? interval.at(1).get<double>() : viscous;
+      if (viscous_total - viscous + highest < 0.0)
         warnings.push_back(format("joint_friction: joint %d's viscous friction is negative (%.3f N m s/rad with the "
-                                  "model's own): not physical", joint + 1, viscous_total));
+                                  "model's own, %.0f %% interval up to %.3f): not physical",
+                                  joint + 1, viscous_total, 100.0 * kIntervalLevel, viscous_total - viscous + highest));
       double fastest = 0.0;
       for (const Part* part : {&d.train, &d.heldout})
         for (const Vector7& dq : part->samples.dq) fastest = std::max(fastest, std::abs(dq[joint]));
@@ -702,7 +703,10 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
     const SetFit fit = fit_set(set, train, heldout, effect->initial_guess(train, train.residual));
     d.effects.push_back(make_result(effect->name(), set, fit, heldout, heldout.residual,
                                     threshold(effect->size(), train.residual, heldout.residual), options));
-    d.effects.back().params = describe_set(set, fit);
+    d.effects.back().params = describe_fit(set, fit.theta, train, fit.train_left, options.seed);
+    const std::array<double, 2> left =
+        bootstrap_fraction(fit.heldout_left, heldout.residual, time_blocks(heldout.samples), options.seed);
+    d.effects.back().explained_fraction_interval = {std::clamp(1.0 - left[1], 0.0, 1.0), std::clamp(1.0 - left[0], 0.0, 1.0)};
   }
   std::stable_sort(d.effects.begin(), d.effects.end(), [](const EffectResult& a, const EffectResult& b) {
     return a.judged_fraction > b.judged_fraction;
@@ -728,13 +732,17 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   const Part& selection_heldout = d.transients.empty() ? heldout : steady_heldout;
   backward_check(selected, current, selection_train, selection_heldout, random_steady ? *random_steady : random,
                  options, d);
-  // The verdict on the whole parts, transients included.
+  // The verdict on the whole parts, transients included; its parameters' intervals from the part
+  // they were fitted on (the steady samples when there are transients).
   const VectorXd theta = current.theta;
-  current = {theta, current.sigma, train.residual - set_torque(selected, train, theta),
+  const VectorXd selection_train_left = current.train_left;
+  current = {theta, train.residual - set_torque(selected, train, theta),
              heldout.residual - set_torque(selected, heldout, theta)};
   d.verdict_heldout_rms_after = rms(current.heldout_left);
   d.unexplained_fraction = current.heldout_left.squaredNorm() / heldout.residual.squaredNorm();
-  d.verdict_params = selected.empty() ? nlohmann::json::object() : describe_set(selected, current);
+  d.unexplained_fraction_interval =
+      bootstrap_fraction(current.heldout_left, heldout.residual, time_blocks(heldout.samples), options.seed);
+  d.verdict_params = describe_fit(selected, theta, selection_train, selection_train_left, options.seed);
   d.verdict_heldout_torque = heldout.residual - current.heldout_left;
   // What is left, localised on the held-out part's steady samples, and the transients of both parts.
   // Localised is what the causes cannot explain with any parameters: the residual after the causes
@@ -782,6 +790,7 @@ nlohmann::json to_json(const Diagnosis& d) {
                           {"train_rms_after", vec(e.train_rms_after)},
                           {"heldout_rms_after", vec(e.heldout_rms_after)},
                           {"explained_fraction", e.explained_fraction},
+                          {"explained_fraction_interval", e.explained_fraction_interval},
                           {"judged_fraction", e.judged_fraction},
                           {"null_threshold", e.null_threshold},
                           {"significant", e.significant}};
@@ -832,6 +841,7 @@ nlohmann::json to_json(const Diagnosis& d) {
                     {"unexplained", unexplained},
                     {"heldout_rms_after", vec(d.verdict_heldout_rms_after)},
                     {"unexplained_fraction", d.unexplained_fraction},
+                    {"unexplained_fraction_interval", d.unexplained_fraction_interval},
                     {"unexplained_split",
                      {{"noise", d.unexplained_noise},
                       {"model_input", d.unexplained_model_input},

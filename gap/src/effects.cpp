@@ -38,9 +38,8 @@ class PerJointLinearEffect : public LinearEffect {
       for (int j = 0; j < kNumJoints; ++j) Y(rows_of(static_cast<int>(k)) + j, j) = x(part, k, j);
     return Y;
   }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
-    return {{parameter_, values(scale_ * theta, 0, kNumJoints)},
-            {parameter_ + "_sigma", values(scale_ * sigma, 0, kNumJoints)}};
+  nlohmann::json describe(const VectorXd& theta) const override {
+    return {{parameter_, values(scale_ * theta, 0, kNumJoints)}};
   }
 
  protected:
@@ -75,12 +74,9 @@ class BaseTilt : public LinearEffect {
   std::string name() const override { return "base_tilt"; }
   int size() const override { return 2; }
   MatrixXd regressor(const Part& part) const override { return part.tilt; }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+  nlohmann::json describe(const VectorXd& theta) const override {
     const double degrees = 180.0 / M_PI;
-    return {{"about_x_deg", degrees * theta[0]},
-            {"about_y_deg", degrees * theta[1]},
-            {"about_x_deg_sigma", degrees * sigma[0]},
-            {"about_y_deg_sigma", degrees * sigma[1]}};
+    return {{"about_x_deg", degrees * theta[0]}, {"about_y_deg", degrees * theta[1]}};
   }
 };
 
@@ -90,8 +86,8 @@ class TimeDelay : public LinearEffect {
   std::string name() const override { return "time_delay"; }
   int size() const override { return 1; }
   MatrixXd regressor(const Part& part) const override { return -stack(part.samples.dtau); }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
-    return {{"delay_ms", 1e3 * theta[0]}, {"delay_ms_sigma", 1e3 * sigma[0]}};
+  nlohmann::json describe(const VectorXd& theta) const override {
+    return {{"delay_ms", 1e3 * theta[0]}};
   }
 };
 
@@ -103,17 +99,23 @@ class InertialParameters : public LinearEffect {
   int size() const override { return static_cast<int>(base_.columns.size()); }
   MatrixXd regressor(const Part& part) const override { return part.inertial(Eigen::all, base_.columns); }
 
+  nlohmann::json describe(const VectorXd& theta) const override {
+    std::vector<std::string> column_names;
+    static const char* const kNames[] = {"m", "hx", "hy", "hz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"};
+    for (int c : base_.columns)
+      column_names.push_back(std::string(kNames[c % kLinkParameters]) + "_" + std::to_string(c / kLinkParameters + 1));
+    return {{"base_parameter_count", size()}, {"base_parameter_columns", column_names}, {"delta", values(theta, 0, size())}};
+  }
+
   // Physical consistency of the corrected model. Base parameters fix only combinations of the 70
   // standard ones, so we check one realisation: the smallest change of the standard parameters
   // reproducing the fitted base-parameter change. Checked: every link's mass > 0 and its inertia
   // about the CoM positive definite with the triangle inequality; and the mass matrix positive
   // definite at the random states used for the base parameters (the identified dynamics are
   // physically meaningful even when the realisation is not).
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+  nlohmann::json consistency(const VectorXd& theta) const override {
     const MatrixXd base_regressor = base_.random_regressor(Eigen::all, base_.columns);
     const VectorXd standard = base_.random_regressor.completeOrthogonalDecomposition().solve(base_regressor * theta);
-    ModelParameters p = model_.parameters();
-    p.end_effector = p.load = RigidBodyInertia{};
     bool links_physical = true;
     double largest_mass_change = 0.0;
     for (int i = 0; i < kNumJoints; ++i) {
@@ -121,7 +123,6 @@ class InertialParameters : public LinearEffect {
       const SpatialInertia body = spatial_inertia(link_parameters(model_.body(i)) + change);
       largest_mass_change = std::max(largest_mass_change, std::abs(change[0]));
       links_physical = links_physical && body.mass > 0.0 && is_physical_inertia(rigid_body(body).inertia);
-      if (body.mass > 0.0) p.links[i] = rigid_body(body);
     }
     bool mass_matrix_pd = links_physical;
     if (!links_physical) {  // the realisation is not a set of bodies; check M = Y(q, 0, e_j) directly
@@ -137,15 +138,7 @@ class InertialParameters : public LinearEffect {
         mass_matrix_pd = mass_matrix_pd && Eigen::LLT<Matrix7>(M).info() == Eigen::Success;
       }
     }
-    std::vector<std::string> column_names;
-    static const char* const kNames[] = {"m", "hx", "hy", "hz", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"};
-    for (int c : base_.columns)
-      column_names.push_back(std::string(kNames[c % kLinkParameters]) + "_" + std::to_string(c / kLinkParameters + 1));
-    return {{"base_parameter_count", size()},
-            {"base_parameter_columns", column_names},
-            {"delta", values(theta, 0, size())},
-            {"delta_sigma", values(sigma, 0, size())},
-            {"largest_link_mass_change_kg", largest_mass_change},
+    return {{"largest_link_mass_change_kg", largest_mass_change},
             {"realisation_physically_consistent", links_physical},
             {"mass_matrix_positive_definite", mass_matrix_pd}};
   }
@@ -174,12 +167,9 @@ class Payload : public Effect {
       columns.col(k) = part.inertial.rightCols<kLinkParameters>() * link7_parameters(VectorXd::Unit(4, k), false);
     return columns.colPivHouseholderQr().solve(target);
   }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+  nlohmann::json describe(const VectorXd& theta) const override {
     const double m = theta[0];
-    return {{"mass_kg", m},
-            {"mass_kg_sigma", sigma[0]},
-            {"com_m", values(theta / m, 1, 3)},
-            {"com_m_sigma", values(sigma / std::abs(m), 1, 3)}};
+    return {{"mass_kg", m}, {"com_m", values(theta / m, 1, 3)}};
   }
 
  private:
@@ -261,17 +251,12 @@ class JointFriction : public Effect {
     return theta;
   }
 
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+  nlohmann::json describe(const VectorXd& theta) const override {
     const VectorXd phi2 = theta(Eigen::seqN(1, kNumJoints, 4)).array().exp();
-    const VectorXd phi2_sigma = phi2.cwiseProduct(sigma(Eigen::seqN(1, kNumJoints, 4)));
     return {{"phi1_Nm", values(theta, 0, kNumJoints, 4)},
-            {"phi1_Nm_sigma", values(sigma, 0, kNumJoints, 4)},
             {"phi2_s_per_rad", values(phi2, 0, kNumJoints)},
-            {"phi2_s_per_rad_sigma", values(phi2_sigma, 0, kNumJoints)},
             {"phi3_rad_per_s", values(theta, 2, kNumJoints, 4)},
-            {"phi3_rad_per_s_sigma", values(sigma, 2, kNumJoints, 4)},
-            {"viscous_Nms_per_rad", values(theta, 3, kNumJoints, 4)},
-            {"viscous_Nms_per_rad_sigma", values(sigma, 3, kNumJoints, 4)}};
+            {"viscous_Nms_per_rad", values(theta, 3, kNumJoints, 4)}};
   }
 
  private:
@@ -363,14 +348,13 @@ class PositionRipple : public Effect {
     }
     return theta;
   }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
-    std::vector<double> amplitude, period, period_sigma;
+  nlohmann::json describe(const VectorXd& theta) const override {
+    std::vector<double> amplitude, period;
     for (int j = 0; j < kNumJoints; ++j) {
       amplitude.push_back(std::hypot(theta[3 * j], theta[3 * j + 1]));
       period.push_back(std::exp(theta[3 * j + 2]));
-      period_sigma.push_back(period.back() * sigma[3 * j + 2]);
     }
-    return {{"amplitude_Nm", amplitude}, {"period_rad", period}, {"period_rad_sigma", period_sigma}};
+    return {{"amplitude_Nm", amplitude}, {"period_rad", period}};
   }
 
  private:
@@ -475,10 +459,9 @@ class AmplitudesAndShape : public Effect {
 class StaticFriction : public AmplitudesAndShape {
  public:
   std::string name() const override { return "static_friction"; }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+  nlohmann::json describe(const VectorXd& theta) const override {
     const VectorXd excess = theta.head<kNumJoints>().array().exp();
     return {{"breakaway_excess_Nm", values(excess, 0, kNumJoints)},
-            {"breakaway_excess_Nm_sigma", values(excess.cwiseProduct(sigma.head<kNumJoints>()), 0, kNumJoints)},
             {"stribeck_velocity_rad_per_s", shared_parameter(theta[kNumJoints])}};
   }
 
@@ -502,9 +485,8 @@ class StaticFriction : public AmplitudesAndShape {
 class FrictionHysteresis : public AmplitudesAndShape {
  public:
   std::string name() const override { return "friction_hysteresis"; }
-  nlohmann::json describe(const VectorXd& theta, const VectorXd& sigma) const override {
+  nlohmann::json describe(const VectorXd& theta) const override {
     return {{"amplitude_Nm", values(theta, 0, kNumJoints)},
-            {"amplitude_Nm_sigma", values(sigma, 0, kNumJoints)},
             {"presliding_distance_rad", shared_parameter(theta[kNumJoints])}};
   }
 

@@ -1,9 +1,11 @@
 #include "csp/gap/report.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
+#include "csp/gap/bootstrap.hpp"
 #include "csp/io/svg_plot.hpp"
 
 namespace csp::gap {
@@ -13,6 +15,13 @@ std::vector<double> joint_series(const Eigen::VectorXd& stacked, int joint) {
   std::vector<double> out;
   for (Eigen::Index r = joint; r < stacked.size(); r += kNumJoints) out.push_back(stacked[r]);
   return out;
+}
+
+// " (95 % interval 12.3-14.5 %)" for a fraction's interval, or nothing when it has none (a short part).
+std::string percent_interval(const std::array<double, 2>& interval, int decimals = 1) {
+  if (!std::isfinite(interval[0])) return "";
+  return format(" (%.0f %% interval %.*f-%.*f %%)", 100.0 * kIntervalLevel, decimals, 100.0 * interval[0], decimals,
+                100.0 * interval[1]);
 }
 
 std::string joint_row(const char* name, const Vector7& v) {
@@ -65,7 +74,9 @@ std::string finding(const Diagnosis& d) {
   } else {
     out += "Adding ";
     for (std::size_t i = 0; i < d.causes.size(); ++i) out.append(i ? ", " : "").append(d.causes[i]);
-    out += format(" removes %.0f %% of its mean square. ", 100.0 * (1.0 - d.unexplained_fraction));
+    out += format(" removes %.0f %% of its mean square", 100.0 * (1.0 - d.unexplained_fraction)) +
+           percent_interval({1.0 - d.unexplained_fraction_interval[1], 1.0 - d.unexplained_fraction_interval[0]}, 0) +
+           ". ";
   }
   out += format("Of the %.1f %% left, %.1f %% is the torque sensor's noise, %.1f %% lies in the model's input (noise "
                 "its velocity carries into the predicted torque) and %.1f %% is the rest. ",
@@ -101,9 +112,10 @@ std::string summary(const Diagnosis& d) {
   out += "effects, each alone (fitted on training, judged on held-out below 5 Hz):\n";
   for (const EffectResult& e : d.effects)
     out += format("  %-20s %3d params  explains %5.1f%% of held-out MS, %5.1f%% below 5 Hz (random regressors: "
-                  "%5.1f%%)  %s\n",
+                  "%5.1f%%)  %s%s\n",
                   e.name.c_str(), e.parameter_count, 100 * e.explained_fraction, 100 * e.judged_fraction,
-                  100 * std::max(0.0, e.null_threshold), e.significant ? "significant" : "-");
+                  100 * std::max(0.0, e.null_threshold), e.significant ? "significant" : "-",
+                  percent_interval(e.explained_fraction_interval).c_str());
   out += "verdict: ";
   if (d.causes.empty()) out += "no effect of the library explains the gap significantly";
   for (std::size_t i = 0; i < d.causes.size(); ++i) out.append(i ? ", " : "").append(d.causes[i]);
@@ -111,7 +123,8 @@ std::string summary(const Diagnosis& d) {
   for (int j = 0; j < kNumJoints; ++j) out += format(" %.3f", d.baseline_heldout_rms[j]);
   out += "\n                             after ";
   for (int j = 0; j < kNumJoints; ++j) out += format(" %.3f", d.verdict_heldout_rms_after[j]);
-  out += format("\nunexplained: %.1f%% of the held-out mean square\n", 100 * d.unexplained_fraction);
+  out += format("\nunexplained: %.1f%% of the held-out mean square%s\n", 100 * d.unexplained_fraction,
+                percent_interval(d.unexplained_fraction_interval).c_str());
   for (const UnexplainedStructure& u : d.unexplained) out += "  " + u.detail + "\n";
   out += "noise floor per joint [Nm] (measured torque / model input):";
   for (const NoiseFloor& f : d.noise_floor) out += format(" %.3f/%.3f", f.measured_rms, f.model_input_rms);
@@ -203,9 +216,9 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
   md += "| held-out RMS [N m] | J1 | J2 | J3 | J4 | J5 | J6 | J7 |\n|---|---|---|---|---|---|---|---|\n";
   md +=
       joint_row("simulator model", d.baseline_heldout_rms) + joint_row("with the causes", d.verdict_heldout_rms_after);
-  md += format("\nUnexplained: %.1f %% of the held-out mean square remains: %.1f %% the torque sensor's noise, %.1f %% in "
-               "the model's input, %.1f %% the rest.\n\n",
-               100 * d.unexplained_fraction, 100 * d.unexplained_noise, 100 * d.unexplained_model_input,
+  md += format("\nUnexplained: %.1f %% of the held-out mean square remains%s: %.1f %% the torque sensor's noise, %.1f "
+               "%% in the model's input, %.1f %% the rest.\n\n",
+               100 * d.unexplained_fraction, percent_interval(d.unexplained_fraction_interval).c_str(), 100 * d.unexplained_noise, 100 * d.unexplained_model_input,
                100 * d.unexplained_rest);
   for (const std::string& w : d.warnings) md += "**Not physical:** " + w + ".\n\n";
   for (const EffectDrift& p : d.drifts) md += "**Drift:** " + p.detail + ".\n\n";
@@ -217,8 +230,8 @@ void write_report(const std::string& dir, const Diagnosis& d, const std::string&
   for (const EffectResult& e : d.effects) {
     std::string joints;
     for (int j : e.joints) joints.append(joints.empty() ? "" : ",").append(std::to_string(j));
-    md += format("| %s | %d | %.1f %% | %.1f %% | %.1f %% | %s | %s |\n", e.name.c_str(), e.parameter_count,
-                 100 * e.explained_fraction, 100 * e.judged_fraction, 100 * std::max(0.0, e.null_threshold),
+    md += format("| %s | %d | %.1f %%%s | %.1f %% | %.1f %% | %s | %s |\n", e.name.c_str(), e.parameter_count,
+                 100 * e.explained_fraction, percent_interval(e.explained_fraction_interval).c_str(), 100 * e.judged_fraction, 100 * std::max(0.0, e.null_threshold),
                  e.significant ? "yes" : "no", joints.c_str());
   }
   md += "\n![ranking](effect_ranking.svg)\n\n## Where the gap lies\n\n```\n" + summary(d) + "```\n\n";

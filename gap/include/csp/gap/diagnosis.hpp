@@ -34,6 +34,7 @@ struct EffectResult {
   nlohmann::json params;
   Vector7 train_rms_after = Vector7::Zero(), heldout_rms_after = Vector7::Zero();
   double explained_fraction = 0.0;  // of the held-out mean square it started from, clipped to 0..1
+  std::array<double, 2> explained_fraction_interval{};  // its block-bootstrap interval (docs/gap.md, "Uncertainty")
   double judged_fraction = 0.0;     // of it, what it removes within the excitation band (the significance's)
   double null_threshold = 0.0;      // best held-out improvement of the random regressors of its size
   bool significant = false;
@@ -123,7 +124,8 @@ struct Diagnosis {
   std::vector<std::string> dropped;   // selected, then dropped: not significant once the later causes were in
   Vector7 verdict_heldout_rms_after = Vector7::Zero();
   double unexplained_fraction = 1.0;       // held-out mean square left by the selected causes
-  nlohmann::json verdict_params;           // the causes' parameters fitted together
+  std::array<double, 2> unexplained_fraction_interval = {1.0, 1.0};  // its block-bootstrap interval
+  nlohmann::json verdict_params;           // the causes' parameters fitted together, with their intervals
   Eigen::VectorXd verdict_heldout_torque;  // the causes' torque on the held-out part (stacked)
   std::vector<UnexplainedStructure> unexplained;  // strongest first (transients too, kind "transient")
   std::vector<Transient> transients;              // left out of the backward check

@@ -24,8 +24,12 @@ class Effect {
   virtual Eigen::MatrixXd jacobian(const Part& part, const Eigen::VectorXd& theta) const;
   // Where the fit to `target` (stacked torque) starts.
   virtual Eigen::VectorXd initial_guess(const Part& part, const Eigen::VectorXd& target) const = 0;
-  // Fitted parameters with their standard deviations, in physical units.
-  virtual nlohmann::json describe(const Eigen::VectorXd& theta, const Eigen::VectorXd& sigma) const = 0;
+  // Fitted parameters in physical units, a number or a list of numbers per key (the diagnosis adds
+  // each one's bootstrap interval as KEY_sigma and KEY_interval: docs/gap.md, "Uncertainty").
+  virtual nlohmann::json describe(const Eigen::VectorXd& theta) const = 0;
+  // What the fitted parameters mean physically beyond their values (whether a physical arm realises
+  // fitted inertial parameters), for the point estimate only: none unless the effect knows better.
+  virtual nlohmann::json consistency(const Eigen::VectorXd&) const { return nlohmann::json::object(); }
 };
 
 // An effect linear in its parameters: torque = regressor * theta.
