@@ -77,15 +77,16 @@ TEST(GapBootstrap, MatchesTheSpreadOfEstimatesOnCorrelatedNoiseWhereTheWhiteSigm
     if (draw >= kBootstrapped) continue;
     const VectorXd left = y - problem.regressor * theta;
     const double variance = left.squaredNorm() / static_cast<double>(left.size() - 3);
-    const std::vector<VectorXd> replicates =
+    const ParameterReplicates replicates =
         bootstrap_parameters(problem.regressor, left, blocks, theta, static_cast<unsigned>(draw));
-    ASSERT_EQ(replicates.size(), static_cast<std::size_t>(kBootstrapReplicates));
+    ASSERT_EQ(replicates.theta.size(), static_cast<std::size_t>(kBootstrapReplicates));
+    EXPECT_TRUE(replicates.undetermined.empty());
     for (int i = 0; i < 3; ++i) {
       std::vector<double> values;
-      for (const VectorXd& r : replicates) values.push_back(r[i]);
+      for (const VectorXd& r : replicates.theta) values.push_back(r[i]);
       bootstrap_sigma[i] += gap::bootstrap_sigma(values, 60) / kBootstrapped;
       white_sigma[i] += std::sqrt(variance * white_covariance(i, i)) / kBootstrapped;
-      const std::array<double, 2> interval = bootstrap_interval(values, theta[i], 60);
+      const std::array<double, 2> interval = bootstrap_interval(values, 60);
       covered += interval[0] <= problem.truth[i] && problem.truth[i] <= interval[1];
     }
   }
@@ -102,33 +103,37 @@ TEST(GapBootstrap, MatchesTheSpreadOfEstimatesOnCorrelatedNoiseWhereTheWhiteSigm
   EXPECT_GE(covered, static_cast<int>(0.85 * 3 * kBootstrapped));
 }
 
-// A direction the data do not determine gets no interval (null in the JSON), the others theirs;
-// add_intervals leaves what is not a fitted number (counts, names, flags) alone.
-TEST(GapBootstrap, AnUndeterminedParameterGetsNoIntervalAndOnlyNumbersGetOne) {
+// A direction the data do not determine is found, and a value that moves along it gets no interval
+// (null in the JSON) while a combination the data do determine gets one; add_intervals leaves what is
+// not a fitted number (counts, names, flags) alone.
+TEST(GapBootstrap, AValueTheDataDoNotDetermineGetsNoIntervalACombinationTheyDoGetsOne) {
   CorrelatedProblem problem;
   MatrixXd regressor(problem.regressor.rows(), 4);
-  regressor << problem.regressor, problem.regressor.col(0) * 2.0;  // parameters 0 and 3 only as a sum
+  regressor << problem.regressor, problem.regressor.col(0) * 2.0;  // the torque sees theta_0 + 2 theta_3 only
   std::mt19937_64 engine(3);
   const VectorXd y = problem.measurement(engine);
   VectorXd theta(4);
   theta << regressor.leftCols(3).colPivHouseholderQr().solve(y), 0.0;
-  const std::vector<VectorXd> replicates =
+  const ParameterReplicates replicates =
       bootstrap_parameters(regressor, y - regressor * theta, time_blocks(problem.samples), theta, 1);
-  ASSERT_EQ(replicates.size(), static_cast<std::size_t>(kBootstrapReplicates));
-  for (const VectorXd& r : replicates) {
-    EXPECT_TRUE(std::isnan(r[0]) && std::isnan(r[3]));
-    EXPECT_TRUE(std::isfinite(r[1]) && std::isfinite(r[2]));
-  }
+  ASSERT_EQ(replicates.undetermined.size(), 1u);
+  const VectorXd& direction = replicates.undetermined[0];
+  EXPECT_NEAR(direction.cwiseAbs().maxCoeff(), 1.0, 1e-12);
+  EXPECT_NEAR(direction[0] + 2.0 * direction[3], 0.0, 1e-9) << direction.transpose();
+  EXPECT_NEAR(direction[1], 0.0, 1e-9);
   auto describe = [](const VectorXd& t) {
-    return nlohmann::json{{"count", 4}, {"names", {"a", "b"}}, {"flag", true}, {"sum_Nm", t[0] + t[3]},
-                          {"values", {t[1], t[2]}}};
+    return nlohmann::json{{"count", 4},           {"names", {"a", "b"}},  {"flag", true},
+                          {"sum_Nm", t[0] + t[3]}, {"seen_Nm", t[0] + 2.0 * t[3]}, {"values", {t[1], t[2]}}};
   };
   nlohmann::json point = describe(theta);
-  std::vector<nlohmann::json> described;
-  for (const VectorXd& r : replicates) described.push_back(describe(r));
-  add_intervals(point, described, 60);
+  std::vector<nlohmann::json> described, moved = {describe(theta + 1e-6 * direction)};
+  for (const VectorXd& r : replicates.theta) described.push_back(describe(r));
+  add_intervals(point, described, 60, moved);
   EXPECT_TRUE(point.at("sum_Nm_sigma").is_null());
   EXPECT_TRUE(point.at("sum_Nm_interval").is_null());
+  ASSERT_TRUE(point.at("seen_Nm_interval").is_array()) << point.dump();
+  EXPECT_LT(point.at("seen_Nm_interval")[0].get<double>(), theta[0]);
+  EXPECT_GT(point.at("seen_Nm_interval")[1].get<double>(), theta[0]);
   ASSERT_EQ(point.at("values_interval").size(), 2u);
   for (int i = 0; i < 2; ++i) {
     const double low = point.at("values_interval")[i][0], high = point.at("values_interval")[i][1];

@@ -9,12 +9,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "csp/dynamics/regressor.hpp"
 #include "kdl_peer.hpp"
 #include "support.hpp"
 
@@ -745,6 +747,70 @@ TEST(PropertiesLoad, FlangeLoadEqualsLink7WithTheLoadAddedByHand) {
       rnea(loaded, data, s.q, s.dq, s.ddq, tau_loaded);
       rnea(by_hand, data, s.q, s.dq, s.ddq, tau_by_hand);
       ASSERT_TRUE(near_rel(tau_loaded, tau_by_hand, kExact));
+    }
+  }
+}
+
+// Physical consistency and the log-Cholesky parametrisation (dynamics/regressor.hpp).
+// The pseudo-inertia of a solid box is known in closed form: Sigma about its centre is
+// m/12 diag(a^2, b^2, c^2) (the second moments), and about a point at -c from it Sigma + m c c^T.
+TEST(PhysicalInertia, PseudoInertiaOfASolidBoxAndTheTriangleInequality) {
+  const double m = 2.0, a = 0.3, b = 0.2, c = 0.1;
+  const Vector3 com(0.05, -0.02, 0.1);
+  const Matrix3 about_com = m / 12.0 * Vector3(b * b + c * c, a * a + c * c, a * a + b * b).asDiagonal();
+  const LinkParameters p = link_parameters(SpatialInertia::from({m, com, about_com}));
+  Eigen::Matrix4d expected = Eigen::Matrix4d::Zero();
+  expected.topLeftCorner<3, 3>() = m / 12.0 * Vector3(a * a, b * b, c * c).asDiagonal();
+  expected.topLeftCorner<3, 3>() += m * com * com.transpose();
+  expected.topRightCorner<3, 1>() = m * com;
+  expected.bottomLeftCorner<1, 3>() = m * com.transpose();
+  expected(3, 3) = m;
+  EXPECT_TRUE(near_rel(pseudo_inertia(p), expected, kExact));
+  EXPECT_TRUE(physically_consistent(p));
+  // Positive mass and a positive-definite inertia that breaks the triangle inequality (Izz > Ixx + Iyy)
+  // are no body; neither is a negative mass.
+  const LinkParameters impossible = link_parameters(SpatialInertia::from({m, com, Vector3(1.0, 1.0, 3.0).asDiagonal()}));
+  EXPECT_FALSE(physically_consistent(impossible));
+  EXPECT_THROW(to_log_cholesky(impossible), std::domain_error);
+  LinkParameters negative = p;
+  negative[0] = -m;
+  EXPECT_FALSE(physically_consistent(negative));
+}
+
+TEST(PhysicalInertia, LogCholeskyRoundTripsEveryLinkAndAnyThetaIsAPhysicalBody) {
+  for (const Arm& arm : physical_arms())
+    for (int i = 0; i < kNumJoints; ++i) {
+      const LinkParameters p = link_parameters(arm.model.body(i));
+      ASSERT_TRUE(physically_consistent(p)) << arm.name << " link " << i + 1;
+      EXPECT_TRUE(near_rel(from_log_cholesky(to_log_cholesky(p)), p, kExact)) << arm.name << " link " << i + 1;
+    }
+  std::mt19937_64 engine(3);
+  std::normal_distribution<double> normal(0.0, 1.5);
+  for (int draw = 0; draw < 1000; ++draw) {
+    LinkParameters theta;
+    for (double& t : theta) t = normal(engine);
+    const LinkParameters p = from_log_cholesky(theta);
+    const RigidBodyInertia body = rigid_body(spatial_inertia(p));
+    ASSERT_GT(body.mass, 0.0) << theta.transpose();
+    ASSERT_TRUE(is_physical_inertia(body.inertia)) << theta.transpose();  // positive definite, triangle inequality
+    // One theta per body (to 1e-6: theta this spread makes ill-conditioned pseudo-inertias, whose
+    // Cholesky factor loses digits).
+    EXPECT_TRUE(near_rel(to_log_cholesky(p), theta, 1e-6));
+  }
+}
+
+TEST(PhysicalInertia, LogCholeskyJacobianMatchesCentralDifferences) {
+  std::mt19937_64 engine(4);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int draw = 0; draw < 20; ++draw) {
+    LinkParameters theta;
+    for (double& t : theta) t = normal(engine);
+    const Eigen::Matrix<double, kLinkParameters, kLinkParameters> jacobian = from_log_cholesky_jacobian(theta);
+    for (int k = 0; k < kLinkParameters; ++k) {
+      const double h = 1e-6;
+      const LinkParameters step = h * LinkParameters::Unit(k);
+      const LinkParameters numeric = (from_log_cholesky(theta + step) - from_log_cholesky(theta - step)) / (2.0 * h);
+      EXPECT_TRUE(near_rel(jacobian.col(k), numeric, 1e-7)) << "parameter " << k;
     }
   }
 }

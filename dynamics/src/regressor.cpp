@@ -1,7 +1,10 @@
 #include "csp/dynamics/regressor.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
+#include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include "csp/dynamics/algorithms.hpp"
 
@@ -24,6 +27,81 @@ RigidBodyInertia rigid_body(const SpatialInertia& body) {
   const Vector3 com = body.first_moment / body.mass;
   const Matrix3 c = skew(com);
   return {body.mass, com, body.rotational + body.mass * c * c};  // I_C = I_O + m [c]x [c]x
+}
+
+Eigen::Matrix4d pseudo_inertia(const LinkParameters& p) {
+  const Matrix3 I = spatial_inertia(p).rotational;
+  Eigen::Matrix4d J;
+  J.topLeftCorner<3, 3>() = 0.5 * I.trace() * Matrix3::Identity() - I;
+  J.topRightCorner<3, 1>() = p.segment<3>(1);
+  J.bottomLeftCorner<1, 3>() = p.segment<3>(1).transpose();
+  J(3, 3) = p[0];
+  return J;
+}
+
+bool physically_consistent(const LinkParameters& p) {
+  const Eigen::LLT<Eigen::Matrix4d> cholesky(pseudo_inertia(p));
+  return cholesky.info() == Eigen::Success;
+}
+
+namespace {
+
+// The standard parameters of a pseudo-inertia (the inverse of pseudo_inertia): I_O = tr(Sigma) 1 - Sigma.
+LinkParameters from_pseudo_inertia(const Eigen::Matrix4d& J) {
+  const Matrix3 Sigma = J.topLeftCorner<3, 3>();
+  const Matrix3 I = Sigma.trace() * Matrix3::Identity() - Sigma;
+  LinkParameters p;
+  p << J(3, 3), J.topRightCorner<3, 1>(), I(0, 0), I(0, 1), I(0, 2), I(1, 1), I(1, 2), I(2, 2);
+  return p;
+}
+
+// U of the log-Cholesky parametrisation, and dU / dtheta_k.
+Eigen::Matrix4d log_cholesky_factor(const LinkParameters& t) {
+  Eigen::Matrix4d U;
+  U << std::exp(t[1]), t[4], t[6], t[7],  //
+      0.0, std::exp(t[2]), t[5], t[8],     //
+      0.0, 0.0, std::exp(t[3]), t[9],      //
+      0.0, 0.0, 0.0, 1.0;
+  return std::exp(t[0]) * U;
+}
+
+Eigen::Matrix4d log_cholesky_factor_derivative(const LinkParameters& t, int k) {
+  if (k == 0) return log_cholesky_factor(t);  // U is e^alpha times the rest
+  static constexpr int kRow[] = {0, 0, 1, 2, 0, 1, 0, 0, 1, 2}, kColumn[] = {0, 0, 1, 2, 1, 2, 2, 3, 3, 3};
+  Eigen::Matrix4d dU = Eigen::Matrix4d::Zero();
+  dU(kRow[k], kColumn[k]) = std::exp(t[0]) * (k <= 3 ? std::exp(t[k]) : 1.0);
+  return dU;
+}
+
+}  // namespace
+
+LinkParameters from_log_cholesky(const LinkParameters& theta) {
+  const Eigen::Matrix4d U = log_cholesky_factor(theta);
+  return from_pseudo_inertia(U * U.transpose());
+}
+
+Eigen::Matrix<double, kLinkParameters, kLinkParameters> from_log_cholesky_jacobian(const LinkParameters& theta) {
+  const Eigen::Matrix4d U = log_cholesky_factor(theta);
+  Eigen::Matrix<double, kLinkParameters, kLinkParameters> jacobian;
+  for (int k = 0; k < kLinkParameters; ++k) {
+    const Eigen::Matrix4d dU = log_cholesky_factor_derivative(theta, k);
+    jacobian.col(k) = from_pseudo_inertia(dU * U.transpose() + U * dU.transpose());  // linear in J
+  }
+  return jacobian;
+}
+
+LinkParameters to_log_cholesky(const LinkParameters& p) {
+  // J = U U^T with U upper triangular: the Cholesky factor of J with rows and columns reversed.
+  const Eigen::Matrix4d reverse = Eigen::Matrix4d::Identity().rowwise().reverse();
+  const Eigen::LLT<Eigen::Matrix4d> cholesky(reverse * pseudo_inertia(p) * reverse);
+  if (cholesky.info() != Eigen::Success)
+    throw std::domain_error("link parameters are not physically consistent (pseudo-inertia not positive definite)");
+  const Eigen::Matrix4d U = reverse * Eigen::Matrix4d(cholesky.matrixL()) * reverse;
+  const double scale = U(3, 3);
+  LinkParameters theta;
+  theta << std::log(scale), std::log(U(0, 0) / scale), std::log(U(1, 1) / scale), std::log(U(2, 2) / scale),
+      U(0, 1) / scale, U(1, 2) / scale, U(0, 2) / scale, U(0, 3) / scale, U(1, 3) / scale, U(2, 3) / scale;
+  return theta;
 }
 
 namespace {

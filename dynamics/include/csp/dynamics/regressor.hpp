@@ -25,6 +25,23 @@ SpatialInertia spatial_inertia(const LinkParameters& p);
 // Mass, CoM and inertia about the CoM; mass must be > 0.
 RigidBodyInertia rigid_body(const SpatialInertia& body);
 
+// Physical consistency (Wensing, Kim and Slotine 2017): the parameters are those of some body with a
+// nonnegative density exactly when the pseudo-inertia J = [Sigma h; h^T m] is positive definite, where
+// Sigma = tr(I_O) / 2 1 - I_O is the second moment of the mass about the link origin (the sum over
+// the body of x x^T dm). Stronger than positive mass and inertia: it implies the triangle inequality.
+Eigen::Matrix4d pseudo_inertia(const LinkParameters& p);
+bool physically_consistent(const LinkParameters& p);
+
+// The log-Cholesky parametrisation (Rucker and Wensing 2022): J = U U^T with
+//   U = e^alpha [e^d1 s12 s13 t1; 0 e^d2 s23 t2; 0 0 e^d3 t3; 0 0 0 1],
+// theta = (alpha, d1, d2, d3, s12, s23, s13, t1, t2, t3). Every theta is a physically consistent
+// body and every such body has exactly one theta: a fit over theta is unconstrained yet physical.
+LinkParameters from_log_cholesky(const LinkParameters& theta);
+// d from_log_cholesky / d theta (10 x 10), exact.
+Eigen::Matrix<double, kLinkParameters, kLinkParameters> from_log_cholesky_jacobian(const LinkParameters& theta);
+// Throws std::domain_error when p is not physically consistent.
+LinkParameters to_log_cholesky(const LinkParameters& p);
+
 // tau = Y(q, dq, ddq) pi. Column k is the RNEA torque of the model with standard parameter k
 // increased by one minus that of the model itself: exact because the torque is linear in pi.
 class InertialRegressor {

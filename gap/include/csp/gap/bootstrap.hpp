@@ -26,31 +26,45 @@ std::vector<int> time_blocks(const Samples& samples, double length = kBootstrapB
 // The one-step block bootstrap of a fit (Davidson and MacKinnon 1999): each replicate draws the
 // blocks of the part it was fitted on with replacement and takes one Gauss-Newton step from the fit
 // `theta` on them: exact for the parameters of linear effects, for the others the linearisation the
-// textbook sigma uses too. `jacobian` is the fitted torque's at theta (stacked, 7 rows per sample),
-// `left` the residual the fit leaves there. A parameter the whole part does not determine is NaN in
-// every replicate. Deterministic for a seed.
-std::vector<Eigen::VectorXd> bootstrap_parameters(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& left,
-                                                  const std::vector<int>& blocks, const Eigen::VectorXd& theta,
-                                                  unsigned seed, int replicates = kBootstrapReplicates);
+// textbook sigma uses too; the step scaled by sqrt(B / (B - 1)), as a mean over B resampled blocks
+// has (B - 1) / B of its variance. `jacobian` is the fitted torque's at theta (stacked, 7 rows per
+// sample), `left` the residual the fit leaves there. Deterministic for a seed.
+struct ParameterReplicates {
+  std::vector<Eigen::VectorXd> theta;
+  // Directions of theta the whole part does not determine (the torque does not change along them),
+  // each scaled to a largest element of 1: a value that moves along one has no interval.
+  std::vector<Eigen::VectorXd> undetermined;
+};
+ParameterReplicates bootstrap_parameters(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& left,
+                                         const std::vector<int>& blocks, const Eigen::VectorXd& theta, unsigned seed,
+                                         int replicates = kBootstrapReplicates);
 
 // The interval of a held-out figure: the mean square of `left` over `before`'s (stacked on the same
-// samples), with the samples' blocks drawn with replacement.
+// samples), with the samples' blocks drawn with replacement (never below zero).
 std::array<double, 2> bootstrap_fraction(const Eigen::VectorXd& left, const Eigen::VectorXd& before,
                                          const std::vector<int>& blocks, unsigned seed,
                                          int replicates = kBootstrapReplicates);
 
-// The kIntervalLevel interval of an estimate from its bootstrap replicates over `blocks` blocks: the
-// replicates' central percentile interval, widened about the estimate for the few blocks a short
-// part has (the percentile interval of a mean over B blocks is the normal interval with the
-// variance's (B - 1) / B; widened by sqrt(B / (B - 1)) t_{B-1} / z it is Student's for B blocks).
-// NaN with fewer than kMinBlocks blocks or a replicate that is not finite.
-std::array<double, 2> bootstrap_interval(std::vector<double> replicates, double estimate, int blocks);
-// Their standard deviation, with the same (B - 1) / B undone; NaN as above.
+// The kIntervalLevel interval from bootstrap replicates over `blocks` blocks: their percentiles at
+// the tail of Student's t with B - 1 degrees of freedom instead of the normal's (for a mean over B
+// blocks, Student's interval; percentiles, so an exp(theta) keeps its skew and its sign). The
+// replicates carry the sqrt(B / (B - 1)) of the resampled variance already. NaN with fewer than
+// kMinBlocks blocks or a replicate that is not finite.
+std::array<double, 2> bootstrap_interval(std::vector<double> replicates, int blocks);
+// Their standard deviation; NaN as above.
 double bootstrap_sigma(const std::vector<double>& replicates, int blocks);
 
 // To every number or list of numbers of `point` (an effect's describe()), adds KEY_sigma and
 // KEY_interval ([low, high], or one per element) from the same key of each replicate's description
-// over `blocks` blocks; null where there is none (a parameter not identified, too few blocks).
-void add_intervals(nlohmann::json& point, const std::vector<nlohmann::json>& replicates, int blocks);
+// over `blocks` blocks; null where there is none: too few blocks, or a value that differs in one of
+// the descriptions `moved` (theta moved a little along each undetermined direction).
+void add_intervals(nlohmann::json& point, const std::vector<nlohmann::json>& replicates, int blocks,
+                   const std::vector<nlohmann::json>& moved = {});
+
+// Whether every number of a description (and of its lists) is finite.
+bool all_finite(const nlohmann::json& description);
+// point + factor (moved - point) for every number and list of numbers of a description; the rest as
+// in `point`. With moved the description at theta + step / factor: the first-order one at theta + step.
+nlohmann::json extrapolate(const nlohmann::json& point, const nlohmann::json& moved, double factor);
 
 }  // namespace csp::gap

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -125,6 +126,9 @@ struct Diagnosis {
   Vector7 verdict_heldout_rms_after = Vector7::Zero();
   double unexplained_fraction = 1.0;       // held-out mean square left by the selected causes
   std::array<double, 2> unexplained_fraction_interval = {1.0, 1.0};  // its block-bootstrap interval
+  // What the causes left of the held-out part with their linear inertial fit, when no physical links
+  // realised it and the verdict is the refit over physical links (docs/gap.md); NaN otherwise.
+  double unconstrained_unexplained_fraction = std::numeric_limits<double>::quiet_NaN();
   nlohmann::json verdict_params;           // the causes' parameters fitted together, with their intervals
   Eigen::VectorXd verdict_heldout_torque;  // the causes' torque on the held-out part (stacked)
   std::vector<UnexplainedStructure> unexplained;  // strongest first (transients too, kind "transient")

@@ -50,6 +50,11 @@ inline constexpr std::array<const char*, 13> kEffectNames = {
 // frame and the base parameters).
 std::vector<std::unique_ptr<Effect>> effect_library(const Model& model);
 
+// inertial_parameters fitted over physical links (the log-Cholesky parametrisation of each link's
+// 10 standard parameters; 70 parameters, nonlinear), or null when the model's own links are not
+// physical. The diagnosis refits a verdict with it when its linear inertial fit is not physical.
+std::unique_ptr<Effect> physical_inertial_parameters(const Model& model);
+
 // The effects' laws, shared by the library (which fits them) and the generator (which injects them
 // into "real" logs). Each is one joint's torque [N m].
 
