@@ -175,9 +175,10 @@ double number_or_nan(const nlohmann::json& value) {
 // at the end of its grid, held there): no interval either.
 std::pair<nlohmann::json, nlohmann::json> uncertainty(const std::vector<double>& replicates, int blocks) {
   const double sigma = bootstrap_sigma(replicates, blocks);
-  const std::array<double, 2> interval = bootstrap_interval(replicates, blocks);
+  if (!std::isfinite(sigma)) return {nullptr, nullptr};  // (finite: at least two replicates)
   const auto [lowest, highest] = std::minmax_element(replicates.begin(), replicates.end());
-  if (!std::isfinite(sigma) || *lowest == *highest) return {nullptr, nullptr};
+  if (*lowest == *highest) return {nullptr, nullptr};
+  const std::array<double, 2> interval = bootstrap_interval(replicates, blocks);
   return {sigma, nlohmann::json{interval[0], interval[1]}};
 }
 

@@ -91,6 +91,13 @@ class TimeDelay : public LinearEffect {
   }
 };
 
+// The smallest change of the 70 standard parameters that reproduces a change of the base ones (over
+// the random states of `base`): one realisation of it, as base parameters fix only combinations.
+VectorXd smallest_standard_change(const BaseParameters& base, const VectorXd& delta) {
+  return base.random_regressor.completeOrthogonalDecomposition().solve(base.random_regressor(Eigen::all, base.columns) *
+                                                                      delta);
+}
+
 // A change of the base parameters (their count, names, values), as both inertial effects report it.
 nlohmann::json describe_base_change(const BaseParameters& base, const VectorXd& delta) {
   std::vector<std::string> column_names;
@@ -119,8 +126,7 @@ class InertialParameters : public LinearEffect {
   // definite at the random states used for the base parameters (the identified dynamics are
   // physically meaningful even when the realisation is not).
   nlohmann::json consistency(const VectorXd& theta) const override {
-    const MatrixXd base_regressor = base_.random_regressor(Eigen::all, base_.columns);
-    const VectorXd standard = base_.random_regressor.completeOrthogonalDecomposition().solve(base_regressor * theta);
+    const VectorXd standard = smallest_standard_change(base_, theta);
     bool links_physical = true;
     double largest_mass_change = 0.0;
     for (int i = 0; i < kNumJoints; ++i) {
@@ -183,8 +189,7 @@ class PhysicalInertialParameters : public Effect {
   // way is rarely physical.
   VectorXd initial_guess(const Part& part, const VectorXd& target) const override {
     const VectorXd delta = part.inertial(Eigen::all, base_.columns).colPivHouseholderQr().solve(target);
-    const VectorXd change =
-        base_.random_regressor.completeOrthogonalDecomposition().solve(base_.random_regressor(Eigen::all, base_.columns) * delta);
+    const VectorXd change = smallest_standard_change(base_, delta);
     auto physical = [&](double fraction) {
       for (int i = 0; i < kNumJoints; ++i) {
         const auto link = Eigen::seqN(kLinkParameters * i, kLinkParameters);
@@ -194,7 +199,13 @@ class PhysicalInertialParameters : public Effect {
     };
     double low = 0.0, high = 1.0;
     if (physical(high)) low = high;
-    for (int step = 0; step < 30 && high - low > 1e-3; ++step) (physical(0.5 * (low + high)) ? low : high) = 0.5 * (low + high);
+    while (high - low > 1e-3) {
+      const double middle = 0.5 * (low + high);
+      if (physical(middle))
+        low = middle;
+      else
+        high = middle;
+    }
     VectorXd theta(size());
     for (int i = 0; i < kNumJoints; ++i) {
       const auto link = Eigen::seqN(kLinkParameters * i, kLinkParameters);
