@@ -616,13 +616,14 @@ std::vector<std::string> physical_warnings(const Model& model, const Diagnosis& 
       const int joint = static_cast<int>(j);
       const double phi1 = number(friction, "phi1_Nm", j), phi2 = number(friction, "phi2_s_per_rad", j),
                    phi3 = number(friction, "phi3_rad_per_s", j), viscous = number(friction, "viscous_Nms_per_rad", j);
-      const double viscous_total = viscous + (own.type == FrictionModel::Type::kLinear ? own.viscous[joint] : 0.0);
+      const double own_viscous = own.type == FrictionModel::Type::kLinear ? own.viscous[joint] : 0.0;
+      const double viscous_total = own_viscous + viscous;
       const nlohmann::json& interval = friction.at("viscous_Nms_per_rad_interval").at(j);
       const double highest = interval.is_array() ? interval.at(1).get<double>() : viscous;
-      if (viscous_total - viscous + highest < 0.0)
+      if (own_viscous + highest < 0.0)
         warnings.push_back(format("joint_friction: joint %d's viscous friction is negative (%.3f N m s/rad with the "
                                   "model's own, %.0f %% interval up to %.3f): not physical",
-                                  joint + 1, viscous_total, 100.0 * kIntervalLevel, viscous_total - viscous + highest));
+                                  joint + 1, viscous_total, 100.0 * kIntervalLevel, own_viscous + highest));
       double fastest = 0.0;
       for (const Part* part : {&d.train, &d.heldout})
         for (const Vector7& dq : part->samples.dq) fastest = std::max(fastest, std::abs(dq[joint]));
