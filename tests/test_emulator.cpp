@@ -1,11 +1,13 @@
 // The emulated robot (rt/): integrator, torque interface, estimators, faults, determinism and
 // scenario files, checked against independent references (a fine RK4 integration of the plant,
 // energy, the applied wrench, the scenario's reference trajectory).
+#include <chrono>
 #include <cstdio>
 #include <functional>
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <thread>
 
 #include "csp/rt/controllers.hpp"
 #include "csp/rt/csv_log.hpp"
@@ -636,22 +638,70 @@ TEST(EmulatorFaults, LatencyBeyondBudgetLosesCommands) {
   EXPECT_NEAR(lost / 20000.0, 0.3173, 0.015);
 }
 
-// Real-time clock: 1 kHz absolute deadlines; every cycle is accounted for.
+// Real-time clock: 1 kHz absolute deadlines; every cycle is accounted for. The machine may stop
+// this process for a while (CI shares two cores with a compiler): to the robot that is a late
+// controller, and 20 cycles without a command end the motion in communication_constraints_violation,
+// which each try then asserts it is; the test asks for one clean 200 ms run in five tries.
 TEST(EmulatorRealtime, RunsAndReportsTiming) {
+  const rt::ErrorSet constraints_violation = [] {
+    rt::ErrorSet errors;
+    errors.set(rt::Error::communication_constraints_violation);
+    return errors;
+  }();
+  for (int attempt = 1; attempt <= 5; ++attempt) {
+    rt::Scenario scenario = default_scenario();
+    Emulator emulator(scenario.emulator);
+    const auto builtin = rt::make_controller(scenario.controller, {}, emulator);
+    rt::LoopOptions options;
+    options.clock = rt::Clock::kRealtime;
+    options.max_duration = 0.2;
+    const auto started = std::chrono::steady_clock::now();
+    const rt::MotionResult result = rt::run_motion(emulator, builtin.mode, builtin.controller, options);
+    const double wall_ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    const rt::TimingReport& timing = result.timing;
+    const uint64_t robot_ms = emulator.state().time.toMSec();
+    EXPECT_EQ(robot_ms, timing.cycles) << "one robot millisecond per cycle";
+    EXPECT_GE(wall_ms + 1.0, static_cast<double>(robot_ms)) << "the robot's time never runs ahead of the wall clock";
+    EXPECT_EQ(timing.wakeup_latency_us.count, timing.controller_compute_us.count) << "one wake-up per command";
+    if (!result.reflex) {
+      EXPECT_EQ(robot_ms, 200u);
+      EXPECT_EQ(timing.wakeup_latency_us.count + timing.missed_deadlines, 200u) << "each cycle woke or was missed";
+      return;
+    }
+    // Each late answer loses itself and the cycles it overran: 20 in a row need overruns + missed >= 20.
+    EXPECT_EQ(result.errors, constraints_violation) << result.reason;
+    EXPECT_GE(timing.overruns + timing.missed_deadlines, 20u) << "a reflex without a stall of 20 cycles";
+    std::printf("try %d stalled: %llu deadlines missed by %llu late answers\n", attempt,
+                static_cast<unsigned long long>(timing.missed_deadlines), static_cast<unsigned long long>(timing.overruns));
+  }
+  ADD_FAILURE() << "five real-time runs of 200 ms each stalled for 20 ms or more";
+}
+
+// A controller that answers 30 ms late in real time: the robot extrapolates the lost commands
+// for 20 cycles and then stops the motion, as the FCI does (libfranka's
+// communication_constraints_violation).
+TEST(EmulatorRealtime, AControllerThirtyMillisecondsLateEndsTheMotion) {
   rt::Scenario scenario = default_scenario();
   Emulator emulator(scenario.emulator);
   const auto builtin = rt::make_controller(scenario.controller, {}, emulator);
+  int calls = 0;
+  const rt::Controller late = [&](const rt::RobotState& state, rt::Duration period) {
+    if (++calls == 50) std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    return builtin.controller(state, period);
+  };
   rt::LoopOptions options;
   options.clock = rt::Clock::kRealtime;
-  options.max_duration = 0.2;
-  const auto started = std::chrono::steady_clock::now();
-  const rt::MotionResult result = rt::run_motion(emulator, builtin.mode, builtin.controller, options);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  EXPECT_FALSE(result.reflex) << result.reason;
-  EXPECT_EQ(emulator.state().time.toMSec(), 200u);
-  EXPECT_GE(wall, 0.19) << "real time: 200 cycles take 200 ms";
-  EXPECT_EQ(result.timing.wakeup_latency_us.count, result.timing.controller_compute_us.count);
-  EXPECT_GE(result.timing.wakeup_latency_us.count, 150u);
+  options.max_duration = 1.0;
+  const rt::MotionResult result = rt::run_motion(emulator, builtin.mode, late, options);
+  ASSERT_TRUE(result.reflex);
+  EXPECT_TRUE(result.errors.has(rt::Error::communication_constraints_violation)) << result.reason;
+  EXPECT_GE(result.timing.overruns + result.timing.missed_deadlines, 20u);
+  EXPECT_GE(result.timing.lost_commands, 20u);
+  // (A loaded machine may stop the process for 20 ms before the controller does; the same rule.)
+  if (calls >= 50) {
+    EXPECT_GE(emulator.state().time.toMSec(), 69u) << "49 answered cycles, then 20 without a command";
+  }
+  EXPECT_LT(emulator.state().time.toMSec(), 1000u);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -63,6 +63,7 @@ rt::Scenario default_scenario() { return rt::load_scenario(rt::default_scenario_
 struct Counted {
   uint64_t cycles = 0;
   uint64_t after_warm_up = 0;   // allocations from the end of the warm-up to the last cycle
+  bool reflex = false;          // the motion ended in a reflex (its reason is a string, allocated)
 };
 
 // Runs the scenario's built-in controller for its duration and counts allocations between the
@@ -83,8 +84,9 @@ Counted run_counted(const rt::Scenario& scenario, rt::Clock clock, const std::fu
     at_last = allocations.load();
   };
   const rt::MotionResult result = rt::run_motion(emulator, builtin.mode, builtin.controller, options);
-  EXPECT_FALSE(result.reflex) << result.reason;
+  if (clock == rt::Clock::kLockstep) EXPECT_FALSE(result.reflex) << result.reason;
   counted.after_warm_up = at_last - at_warm_up;
+  counted.reflex = result.reflex;
   return counted;
 }
 
@@ -124,13 +126,20 @@ TEST(LoopAllocation, LockstepLossyNetworkAllocatesNothing) {
   EXPECT_EQ(counted.after_warm_up, 0u);
 }
 
-// The real-time loop: the deadline clock and its statistics allocate nothing per cycle either.
+// The real-time loop: the deadline clock and its statistics allocate nothing per cycle either. A
+// loaded machine may stop the process for 20 ms, which ends the motion in a reflex whose reason is
+// a new string (EmulatorRealtime.RunsAndReportsTiming): the test asks for one run without, in five.
 TEST(LoopAllocation, RealtimeMotionAllocatesNothing) {
   rt::Scenario scenario = default_scenario();
   scenario.duration = 0.2;
-  const Counted counted = run_counted(scenario, rt::Clock::kRealtime);
-  EXPECT_GE(counted.cycles, 150u);
-  EXPECT_EQ(counted.after_warm_up, 0u);
+  for (int attempt = 1; attempt <= 5; ++attempt) {
+    const Counted counted = run_counted(scenario, rt::Clock::kRealtime);
+    if (counted.reflex) continue;
+    EXPECT_EQ(counted.cycles, 200u);
+    EXPECT_EQ(counted.after_warm_up, 0u);
+    return;
+  }
+  ADD_FAILURE() << "five real-time runs of 200 ms each stalled for 20 ms or more";
 }
 
 // Emulator::step alone, in motion and idle.
