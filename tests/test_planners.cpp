@@ -577,8 +577,9 @@ TEST(MotionCheck, NeverCertifiesAMotionThatDenseResamplingFindsInCollision) {
       const Vector7 q_b = q_a + random.uniform(0.4);
       if (!checker.is_valid(q_b)) continue;
       const bool free = checker.motion_is_free(q_a, q_b);
-      // Dense: joint steps of at most 1e-4 rad, every state against every pair.
-      const int steps = static_cast<int>(std::ceil((q_b - q_a).cwiseAbs().maxCoeff() / 1e-4));
+      // Dense: joint steps of at most 1e-4 rad (5e-4 under the sanitizers), every state against every pair.
+      const double dense_step = kSanitized ? 5e-4 : 1e-4;
+      const int steps = static_cast<int>(std::ceil((q_b - q_a).cwiseAbs().maxCoeff() / dense_step));
       double lowest = std::numeric_limits<double>::infinity();
       for (int s = 0; s <= steps; ++s)
         lowest = std::min(lowest, checker.check_all_pairs(q_a + (q_b - q_a) * s / steps).clearance);
