@@ -1,7 +1,6 @@
 // csp can: the arm's joint drives on a CANopen bus (docs/can.md). `csp can serve` runs them on
 // SocketCAN; `csp can eds` and `csp can dbc` print the files generated from the drives' object table.
 #include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -15,7 +14,6 @@
 namespace csp::cli {
 namespace {
 
-std::atomic<bool> interrupted{false};
 
 struct CanArguments {
   int node = 1;
@@ -50,10 +48,9 @@ int run_serve(const CanArguments& args) {
   options.bitrate = args.bitrate;
   options.log_path = args.log;
   options.duration = scenario.duration;
-  options.stop = &interrupted;
   // Ctrl-C / SIGTERM end the run cleanly: the log keeps every cycle run.
-  std::signal(SIGINT, [](int) { interrupted = true; });
-  std::signal(SIGTERM, [](int) { interrupted = true; });
+  const std::atomic<bool>& interrupted = stop_on_signals();
+  options.stop = &interrupted;
   std::vector<std::string> names;
   try {
     names = can::split_interfaces(args.iface, args.split);

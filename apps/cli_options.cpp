@@ -1,6 +1,7 @@
 #include "cli_options.hpp"
 
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 
 #include "csp/dynamics/arrays.hpp"
@@ -91,6 +92,17 @@ rt::Scenario ScenarioArguments::load() const {
   }
   if (!clock.empty()) s.clock = clock == "realtime" ? rt::Clock::kRealtime : rt::Clock::kLockstep;
   return s;
+}
+
+namespace {
+std::atomic<bool> stop_requested{false};
+}  // namespace
+
+std::atomic<bool>& stop_on_signals() {
+  stop_requested = false;
+  std::signal(SIGINT, [](int) { stop_requested = true; });
+  std::signal(SIGTERM, [](int) { stop_requested = true; });
+  return stop_requested;
 }
 
 }  // namespace csp::cli

@@ -1,6 +1,7 @@
 // Command-line pieces shared by the csp subcommands.
 #pragma once
 
+#include <atomic>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -46,5 +47,9 @@ struct ScenarioArguments {
   // The scenario file with --clock and --duration applied (UsageError on a bad duration).
   rt::Scenario load() const;
 };
+
+// The flag a run polls to end as its duration would: set by Ctrl-C (SIGINT) and SIGTERM from now
+// on, false until then. One flag for the process (a signal handler sees only globals).
+std::atomic<bool>& stop_on_signals();
 
 }  // namespace csp::cli

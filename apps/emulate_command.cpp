@@ -2,7 +2,6 @@
 // tracking error, reflexes and timing; optionally write the per-cycle CSV log.
 #include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -72,7 +71,6 @@ void print_percentiles(const char* name, const rt::Percentiles& p) {
               p.max, p.count);
 }
 
-std::atomic<bool> interrupted{false};
 
 int run_emulate(const EmulateArguments& args) {
   rt::Scenario scenario = args.scenario.load();
@@ -104,9 +102,7 @@ int run_emulate(const EmulateArguments& args) {
   options.max_duration = scenario.duration;
   // Ctrl-C (or SIGTERM) and a log that cannot be written end the motion as its duration would:
   // the robot holds, the summary is printed, the logs end with whole rows and events.
-  interrupted = false;
-  std::signal(SIGINT, [](int) { interrupted = true; });
-  std::signal(SIGTERM, [](int) { interrupted = true; });
+  std::atomic<bool>& interrupted = stop_on_signals();
   options.stop = &interrupted;
   std::string write_error;
   ProgressMeter progress("csp emulate", args.progress);

@@ -1,7 +1,6 @@
 // csp replay: re-simulate a CSP log and report how far the states differ from the recorded ones,
 // or play a log back onto LCM like lcm-logplayer.
 #include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <memory>
 
@@ -13,7 +12,6 @@
 namespace csp::cli {
 namespace {
 
-std::atomic<bool> interrupted{false};
 
 struct ReplayArguments {
   std::string log, scenario;
@@ -27,12 +25,11 @@ struct ReplayArguments {
 int run_replay(const ReplayArguments& args) {
   if (args.play && !args.scenario.empty()) throw UsageError("--scenario: re-simulation only; --play publishes the log as it is");
   if (args.play) {
-    std::signal(SIGINT, [](int) { interrupted = true; });
     bridge::PlaybackOptions options;
     options.speed = args.speed;
     options.max_gap = args.max_gap;
     options.lcm_url = args.lcm_url;
-    options.stop = &interrupted;
+    options.stop = &stop_on_signals();  // Ctrl-C / SIGTERM end the playback
     ProgressMeter progress("csp replay", args.progress);
     options.progress = progress.callback();
     const bridge::PlaybackReport r = bridge::play_back(args.log, options);

@@ -2,7 +2,6 @@
 // (docs/bridge.md); optionally records the session as an LCM log.
 #include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -14,7 +13,6 @@
 namespace csp::cli {
 namespace {
 
-std::atomic<bool> interrupted{false};
 
 struct ServeArguments {
   ScenarioArguments scenario;
@@ -38,10 +36,9 @@ int run_serve(const ServeArguments& args) {
   options.log_path = args.log;
   options.lockstep_timeout = args.lockstep_timeout;
   options.wait_for_controller = args.wait;
+  // Ctrl-C / SIGTERM end the run cleanly: the log keeps every cycle run.
+  const std::atomic<bool>& interrupted = stop_on_signals();
   options.stop = &interrupted;
-  // Ctrl-C ends the run cleanly: the log keeps every cycle run.
-  std::signal(SIGINT, [](int) { interrupted = true; });
-  std::signal(SIGTERM, [](int) { interrupted = true; });
 
   std::printf("csp serve: %s (%s), %s clock, %.3f s on %s, channels %sCSP_*\n", scenario.name.c_str(), scenario.path.c_str(),
               options.clock == rt::Clock::kLockstep ? "lockstep" : "real-time", options.duration, options.lcm_url.c_str(),

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <stdexcept>
 #include <cstdio>
 #include <iterator>
 #include <string>
@@ -53,6 +54,36 @@ Eigen::Matrix<double, N, 1> vector_from(const nlohmann::json& values) {
 
 inline Model make_model(const std::string& robot, ModelOptions options = {}) {
   return Model(model_parameters(load_robot_config(robot_file(robot)), options));
+}
+
+// The model `csp gap` diagnoses with in the gap tests: the Panda without friction (friction is the
+// library's to find).
+inline Model diagnosing_model() {
+  ModelOptions options;
+  options.friction = "none";
+  return make_model("panda", options);
+}
+
+// The scenario a plain `csp emulate` runs.
+inline const std::string kDefaultScenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml";
+
+// A file's bytes; throws when it cannot be read (a missing output is a failure, not "").
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// One sampled state of the arm's motion.
+struct State {
+  Vector7 q, dq, ddq;
+};
+
+// The mass matrix M(q) by CRBA.
+inline Matrix7 mass_of(const Model& model, const Vector7& q) {
+  Data data;
+  crba(model, data, q);
+  return data.mass_matrix;
 }
 
 inline Vector7 v7(const nlohmann::json& values) { return vector_from<7>(values); }

@@ -11,13 +11,13 @@
 #include "csp/bridge/controllers.hpp"
 #include "csp/bridge/csv_convert.hpp"
 #include "csp/bridge/replay.hpp"
+#include "support.hpp"
 
 namespace csp::bridge {
 namespace {
 
 using namespace std::chrono_literals;
 
-const std::string kScenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml";
 
 // status_t messages of a log, in order.
 std::vector<status_t> statuses_in_log(const std::string& path) {
@@ -35,7 +35,7 @@ std::vector<status_t> statuses_in_log(const std::string& path) {
 TEST(BridgeNet, LockstepExternalControllerMatchesInProcessRun) {
   const std::string url = test::unique_lcm_url(0), log = test::temp_path("lockstep.lcmlog");
   const double motion = 2.0;
-  test::Process server({CSP_EXECUTABLE, "serve", kScenario, "--clock", "lockstep", "--wait", "--duration", "2.1",
+  test::Process server({CSP_EXECUTABLE, "serve", test::kDefaultScenario, "--clock", "lockstep", "--wait", "--duration", "2.1",
                         "--lockstep-timeout", "5", "--lcm-url", url, "--log", log},
                        test::temp_path("serve.out"));
   test::Process controller({CSP_LCM_JOINT_IMPEDANCE, "--lcm-url", url, "--duration", "2", "--amplitude", "0.2", "--timeout", "30"},
@@ -52,7 +52,7 @@ TEST(BridgeNet, LockstepExternalControllerMatchesInProcessRun) {
   EXPECT_EQ(status.rejected_stale + status.rejected_fingerprint + status.rejected_truncated + status.rejected_oversized, 0);
 
   // The same controller in-process from the same scenario, then the same idle cycles.
-  const rt::Scenario scenario = rt::load_scenario(kScenario);
+  const rt::Scenario scenario = rt::load_scenario(test::kDefaultScenario);
   rt::Emulator emulator(scenario.emulator);
   std::vector<robot_state_t> reference{to_message(emulator.state(), 0, false)};
   rt::LoopOptions options;
@@ -78,7 +78,7 @@ TEST(BridgeNet, LockstepExternalControllerMatchesInProcessRun) {
 // with communication_constraints_violation after 20 lost cycles and the server shuts down cleanly.
 TEST(BridgeNet, RealtimeSilentControllerTriggersCommunicationConstraintsViolation) {
   const std::string url = test::unique_lcm_url(1), log = test::temp_path("realtime.lcmlog");
-  test::Process server({CSP_EXECUTABLE, "serve", kScenario, "--clock", "realtime", "--duration", "1.5", "--lcm-url", url, "--log", log},
+  test::Process server({CSP_EXECUTABLE, "serve", test::kDefaultScenario, "--clock", "realtime", "--duration", "1.5", "--lcm-url", url, "--log", log},
                        test::temp_path("serve-rt.out"));
   Client client(url, "", 30.0);   // generous: the server may start slowly on a loaded machine
   int commands = 0;
@@ -115,7 +115,7 @@ TEST(BridgeNet, LcmLoggerRecordingIsReadByCspLogExport) {
   // Markers on a channel of their own: the logger records the session only once it has
   // recorded "ready", and has received all of it once it has recorded "end".
   ASSERT_TRUE(test::wait_until_logged(probe, theirs, "ready")) << logger.output();
-  test::Process server({CSP_EXECUTABLE, "serve", kScenario, "--clock", "realtime", "--duration", "0.3", "--lcm-url", url, "--log", ours},
+  test::Process server({CSP_EXECUTABLE, "serve", test::kDefaultScenario, "--clock", "realtime", "--duration", "0.3", "--lcm-url", url, "--log", ours},
                        test::temp_path("serve-logger.out"));
   ASSERT_EQ(server.wait(30s), 0) << server.output();
   ASSERT_TRUE(test::wait_until_logged(probe, theirs, "end")) << logger.output();
@@ -134,7 +134,7 @@ TEST(BridgeNet, LcmLoggerRecordingIsReadByCspLogExport) {
 // lcm-logplayer plays a CSP log; a CSP subscriber receives and decodes every state.
 TEST(BridgeNet, LcmLogplayerPlaysACspLog) {
   const std::string url = test::unique_lcm_url(3), path = test::temp_path("played.lcmlog");
-  rt::Emulator emulator(rt::load_scenario(kScenario).emulator);
+  rt::Emulator emulator(rt::load_scenario(test::kDefaultScenario).emulator);
   {
     LogWriter log(path);
     for (int i = 0; i < 200; ++i) {

@@ -19,13 +19,13 @@
 #include "csp/bridge/replay.hpp"
 #include "csp/rt/emulator.hpp"
 #include "csp/rt/scenario.hpp"
+#include "support.hpp"
 
 namespace csp::bridge {
 namespace {
 
 using namespace std::chrono_literals;
 
-const std::string kScenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml";
 const std::string kTypes = CSP_LCM_PYTHON_TYPES;   // build/bridge/python
 const std::string kClient = std::string(CSP_SOURCE_DIR) + "/bridge/python";
 const std::string kExample = std::string(CSP_SOURCE_DIR) + "/bridge/examples/python_float.py";
@@ -94,7 +94,7 @@ struct EchoPeer {
 // applied to the state it answers (decoded by CSP's C++ types), and the session replays bit for bit.
 TEST(BridgePython, PythonFloatDrivesLockstepServerWithoutLoss) {
   const std::string url = test::unique_lcm_url(4), log = test::temp_path("python-float.lcmlog");
-  test::Process server({CSP_EXECUTABLE, "serve", kScenario, "--clock", "lockstep", "--wait", "--duration", "1.1",
+  test::Process server({CSP_EXECUTABLE, "serve", test::kDefaultScenario, "--clock", "lockstep", "--wait", "--duration", "1.1",
                         "--lockstep-timeout", "5", "--lcm-url", url, "--log", log},
                        test::temp_path("serve-python.out"));
   test::Process controller(python(kTypes + ":" + kClient, {kExample, "--lcm-url", url, "--duration", "1", "--timeout", "30"}),
@@ -178,7 +178,7 @@ TEST(BridgePython, PythonReassemblesFragmentsOfLcmsCLibrary) {
   // A receive buffer for all three fragments: Python reads them only when it calls handle().
   const std::string url = test::unique_lcm_url(7) + "&recv_buf_size=1000000";
   const std::string big = random_bytes(150'000, 3);
-  rt::Emulator emulator(rt::load_scenario(kScenario).emulator);
+  rt::Emulator emulator(rt::load_scenario(test::kDefaultScenario).emulator);
   emulator.step(nullptr);
   robot_state_t message = to_message(emulator.state(), 1'700'000'000'000'000, true);
   message.current_errors[3] = message.last_motion_errors[40] = 1;   // boolean arrays: lcm-gen 1.3.1's weak spot

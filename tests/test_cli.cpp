@@ -28,13 +28,6 @@ using nlohmann::json;
 
 using Process = ProgramRun;
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // Runs `csp args...` (tests/support.hpp).
 Process run_csp(const std::vector<std::string>& args) { return run_program(CSP_EXECUTABLE, args); }
 

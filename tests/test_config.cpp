@@ -412,14 +412,6 @@ TEST(ConfigVelocityLimits, PandaLimitsAreConstant) {
 // Validation: each rule rejects a broken copy of panda.yaml with a message naming the file, the
 // key path and what was expected.
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read " + path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 std::string write_temp(const std::string& file_name, const std::string& text) {
   const std::string path = (temp_dir() / file_name).string();
   std::ofstream out(path);

@@ -18,10 +18,7 @@ namespace {
 
 using csp::rt::Error;
 
-// The emulated robot with robot time moving only inside calls, for bit-reproducible runs.
-struct Robot : csp::franka_access::EmulatedRobot {
-  explicit Robot(const csp::rt::Scenario& scenario) : EmulatedRobot(scenario) { setIdleTimeRuns(false); }
-};
+using Robot = csp::franka_access::LockstepRobot;
 
 csp::rt::ErrorSet set_of(const franka::Errors& errors) { return csp::rt::ErrorSet(errors); }
 

@@ -32,10 +32,8 @@ const std::string kScenarios = std::string(CSP_SOURCE_DIR) + "/configs/scenarios
 csp::rt::Scenario libfranka_panda() { return csp::rt::load_scenario(kScenarios + "/libfranka_panda.yaml"); }
 
 // Robot time moving only inside calls: bit-reproducible.
-struct Robot : csp::franka_access::EmulatedRobot {
-  explicit Robot(const csp::rt::Scenario& scenario = libfranka_panda()) : EmulatedRobot(scenario) {
-    setIdleTimeRuns(false);
-  }
+struct PandaRobot : csp::franka_access::LockstepRobot {
+  PandaRobot() : LockstepRobot(libfranka_panda()) {}
 };
 
 // libfranka examples' start pose (examples_common: q_goal).
@@ -82,7 +80,7 @@ TEST(FrankaAddress, HostnameConnectsToTheLibfrankaScenarioAtTheExamplesStartPose
 // ---- External control loop
 
 TEST(FrankaExternalLoop, PeriodsOneWritePerReadAndMotionFinished) {
-  Robot robot;
+  PandaRobot robot;
   auto control = robot.startJointPositionControl(Move::ControllerMode::kJointImpedance);
   // While the loop runs, nothing else may use the robot.
   EXPECT_THROW(robot.readOnce(), franka::InvalidOperationException);
@@ -116,7 +114,7 @@ TEST(FrankaExternalLoop, PeriodsOneWritePerReadAndMotionFinished) {
 }
 
 TEST(FrankaExternalLoop, UnansweredStatesAreLostCommandsAndTwentyEndTheMotion) {
-  Robot robot;
+  PandaRobot robot;
   auto control = robot.startTorqueControl();
   control->readOnce();
   control->writeOnce(franka::Torques({0, 0, 0, 0, 0, 0, 0}));
@@ -139,7 +137,7 @@ TEST(FrankaExternalLoop, UnansweredStatesAreLostCommandsAndTwentyEndTheMotion) {
 }
 
 TEST(FrankaExternalLoop, WriteOnceRulesOfTheControllerMode) {
-  Robot robot;
+  PandaRobot robot;
   {
     auto control = robot.startJointVelocityControl(Move::ControllerMode::kJointImpedance);
     control->readOnce();
@@ -163,7 +161,7 @@ TEST(FrankaExternalLoop, WriteOnceRulesOfTheControllerMode) {
 // ---- Robot::stop from another thread
 
 TEST(FrankaStop, StopFromAnotherThreadPreemptsControl) {
-  Robot robot;
+  PandaRobot robot;
   std::atomic<int> cycles{0};
   std::thread stopper([&] {
     while (cycles.load() < 100) std::this_thread::yield();
@@ -189,7 +187,7 @@ TEST(FrankaStop, StopFromAnotherThreadPreemptsControl) {
 }
 
 TEST(FrankaStop, StopEndsTheExternalLoopAtItsNextRead) {
-  Robot robot;
+  PandaRobot robot;
   auto control = robot.startTorqueControl();
   control->readOnce();
   robot.stop();
@@ -237,7 +235,7 @@ TEST(FrankaIdleTime, RobotTimeRunsWhileTheProgramIsOutsideACall) {
 // 5 cm along x and back in 2 s, rest to rest; the end effector ends where the pose says.
 TEST(FrankaCartesian, PoseMotionTracksTheCommandedPose) {
   for (auto mode : {franka::ControllerMode::kJointImpedance, franka::ControllerMode::kCartesianImpedance}) {
-    Robot robot;
+    PandaRobot robot;
     std::array<double, 16> start{};
     double time = 0.0;
     robot.control(
@@ -256,7 +254,7 @@ TEST(FrankaCartesian, PoseMotionTracksTheCommandedPose) {
 }
 
 TEST(FrankaCartesian, VelocityMotionWithElbowAndTorqueWithMotionGenerator) {
-  Robot robot;
+  PandaRobot robot;
   robot.setCartesianImpedance({{3000, 3000, 3000, 300, 300, 300}});
   EXPECT_THROW(robot.setCartesianImpedance({{5000, 3000, 3000, 300, 300, 300}}), franka::CommandException);
   double time = 0.0;

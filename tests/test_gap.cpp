@@ -18,12 +18,6 @@ namespace {
 
 using namespace csp::gap;
 
-Model diagnosing_model() {
-  ModelOptions options;
-  options.friction = "none";
-  return make_model("panda", options);
-}
-
 // A generated log of the diagnosing model itself (no injected effect), `duration` seconds long.
 JointLog plain_log(const Model& model, double duration, unsigned seed, bool noisy = true) {
   LogOptions options;

@@ -45,12 +45,6 @@ const std::vector<std::string> kTruths = every_truth();
 const std::vector<std::string> kEmulatedTruths = every_truth();
 #endif
 
-Model diagnosing_model() {
-  ModelOptions options;
-  options.friction = "none";
-  return make_model("panda", options);
-}
-
 using Generator = JointLog (*)(const Model&, const InjectedEffects&, unsigned, unsigned, const LogOptions&);
 
 // Training and held-out logs of one truth; `seed` picks the effect's size, trajectories and noise.

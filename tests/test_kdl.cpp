@@ -20,10 +20,10 @@
 namespace csp::test {
 namespace {
 
-constexpr int kNumStates = 1000;
+constexpr int kStatesPerCase = 1000;
 constexpr unsigned kSeed = 20240917;
-constexpr double kMaxVelocity = 2.5;        // rad/s
-constexpr double kMaxAcceleration = 10.0;   // rad/s^2
+constexpr double kKdlMaxVelocity = 2.5;        // rad/s
+constexpr double kKdlMaxAcceleration = 10.0;   // rad/s^2
 constexpr double kTolerance = 1e-9;
 
 struct Case {
@@ -56,11 +56,7 @@ std::vector<Case> cases() {
           {"fr3_hand_load_tilted_gravity", "fr3", fr3_loaded}};
 }
 
-struct State {
-  Vector7 q, dq, ddq;
-};
-
-// Runs `error(model, peer, data, state)` -> max |CSP - KDL| over kNumStates seeded states of
+// Runs `error(model, peer, data, state)` -> max |CSP - KDL| over kStatesPerCase seeded states of
 // every case, prints the worst value and expects it below kTolerance.
 template <class Error>
 void expect_agreement(const char* quantity, Error&& error) {
@@ -72,11 +68,11 @@ void expect_agreement(const char* quantity, Error&& error) {
     RandomStates random(kSeed);
     double worst = 0.0;
     int worst_state = -1;
-    for (int k = 0; k < kNumStates; ++k) {
+    for (int k = 0; k < kStatesPerCase; ++k) {
       State s;
       s.q = random.q(model.parameters().joint_limits);
-      s.dq = random.uniform(kMaxVelocity);
-      s.ddq = random.uniform(kMaxAcceleration);
+      s.dq = random.uniform(kKdlMaxVelocity);
+      s.ddq = random.uniform(kKdlMaxAcceleration);
       const double e = error(model, peer, data, s);
       if (!std::isfinite(e)) {
         ADD_FAILURE() << quantity << ": non-finite difference at state " << k;

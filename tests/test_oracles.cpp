@@ -66,12 +66,6 @@ Vector7 coriolis_of(const Model& model, const Vector7& q, const Vector7& dq) {
   return c;
 }
 
-Matrix7 mass_of(const Model& model, const Vector7& q) {
-  Data data;
-  crba(model, data, q);
-  return data.mass_matrix;
-}
-
 Data kinematics_of(const Model& model, const Vector7& q) {
   Data data;
   forward_kinematics(model, data, q);

@@ -312,13 +312,6 @@ TEST(PlanCheck, GazTrajectoryOneWithinThePandasLimitsAndFiguresRecomputed) {
 
 // ---------------- The command line ----------------
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 ProgramRun run_csp(const std::vector<std::string>& args) { return run_program(CSP_EXECUTABLE, args); }
 
 TEST(PlanCommand, BrokenTrajectoryFilesAreRefusedWithLineAndColumn) {

@@ -55,10 +55,6 @@ template <typename A, typename B>
                                        << "\nactual:\n" << actual << "\nexpected:\n" << expected;
 }
 
-struct State {
-  Vector7 q, dq, ddq;
-};
-
 // kNumStates random states within the joint limits of `model`, the same for every call.
 std::vector<State> random_states(const Model& model, unsigned seed = 42) {
   RandomStates random(seed);
@@ -81,12 +77,6 @@ LinkWrenches random_wrenches(RandomStates& random) {
     wrench << 20.0 * r.head<3>(), 5.0 * r.segment<3>(3);
   }
   return w;
-}
-
-Matrix7 mass_of(const Model& model, const Vector7& q) {
-  Data data;
-  crba(model, data, q);
-  return data.mass_matrix;
 }
 
 Transform pose_of(const Model& model, const Vector7& q, Frame frame) {

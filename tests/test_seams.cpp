@@ -22,17 +22,10 @@ namespace csp {
 namespace {
 
 using namespace std::chrono_literals;
+using test::read_text;
 
 const std::string kCsp = CSP_EXECUTABLE;
 const std::string kRealLog = std::string(CSP_SHARED_DATA_DIR) + "/real/panda_exciting_traj_1.csv";
-const std::string kScenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml";
-
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // Runs `csp args...` and returns its exit code; its output goes to `output` (shown on failure).
 int run_csp(const std::vector<std::string>& args, const std::string& output) {
@@ -231,7 +224,7 @@ TEST(Seams, EmulatedCsvSurvivesImportAndExportByteForByte) {
 TEST(Seams, ServedLcmLogGivesTheSameDiagnosisDirectlyAndViaExport) {
   const std::string url = test::unique_lcm_url(0), lcm_log = test::temp_path("served.lcmlog"),
                     csv = test::temp_path("served.csv");
-  test::Process server({kCsp, "serve", kScenario, "--clock", "lockstep", "--wait", "--duration", "2.1",
+  test::Process server({kCsp, "serve", test::kDefaultScenario, "--clock", "lockstep", "--wait", "--duration", "2.1",
                         "--lockstep-timeout", "5", "--lcm-url", url, "--log", lcm_log},
                        test::temp_path("serve.out"));
   test::Process controller({CSP_LCM_JOINT_IMPEDANCE, "--lcm-url", url, "--duration", "2", "--amplitude", "0.2",
@@ -335,7 +328,7 @@ TEST(Seams, RealCsvSurvivesImportReplayAndExport) {
 // hand at 6 s (an external wrench no effect of the library models).
 TEST(Seams, EmulatedDefaultScenarioNamesWhatReallyDiffers) {
   const std::string csv = test::temp_path("default.csv"), out = test::temp_path("default.out");
-  ASSERT_EQ(run_csp({"emulate", kScenario, "--duration", "5.9", "--log", csv}, out), 0) << read_text(out);
+  ASSERT_EQ(run_csp({"emulate", test::kDefaultScenario, "--duration", "5.9", "--log", csv}, out), 0) << read_text(out);
   const nlohmann::json j = gap_json(csv, {"--inertia", "libfranka_fit", "--friction", "none", "--ee", "hand"}, "default");
   const std::vector<std::string> causes = j.at("verdict").at("causes");
   ASSERT_GE(causes.size(), 2u) << j.at("verdict").dump();
@@ -362,7 +355,7 @@ TEST(Seams, EmulatedDefaultScenarioNamesWhatReallyDiffers) {
 // (tau_ext_hat_filtered, from its model, not gap's) finds it largest on, starting when it starts.
 TEST(Seams, EmulatedPushIsLocalisedAndLeftOutOfTheSelection) {
   const std::string csv = test::temp_path("push.csv"), out = test::temp_path("push.out");
-  ASSERT_EQ(run_csp({"emulate", kScenario, "--duration", "12", "--log", csv}, out), 0) << read_text(out);
+  ASSERT_EQ(run_csp({"emulate", test::kDefaultScenario, "--duration", "12", "--log", csv}, out), 0) << read_text(out);
   const JointLog log = read_joint_log_csv(csv);
   Vector7 push = Vector7::Zero(), steady = Vector7::Zero();  // mean |tau_ext| during the push and before it
   int in_push = 0, before = 0;
@@ -440,7 +433,7 @@ std::vector<std::string> csv_rows(const std::string& path) {
 TEST(Seams, LcmLoggerRecordingOfAServeSessionReplaysExportsAndDiagnoses) {
   const std::string url = test::unique_lcm_url(2), ours = test::temp_path("session_ours.lcmlog"),
                     theirs = test::temp_path("session_logger.lcmlog");
-  test::Process server({kCsp, "serve", kScenario, "--clock", "lockstep", "--duration", "5", "--lockstep-timeout", "5",
+  test::Process server({kCsp, "serve", test::kDefaultScenario, "--clock", "lockstep", "--duration", "5", "--lockstep-timeout", "5",
                         "--lcm-url", url, "--log", ours},
                        test::temp_path("session_serve.out"));
   lcm::LCM probe(url);

@@ -14,7 +14,7 @@ namespace {
 
 constexpr double kOrthonormalThreshold = 1e-5; // libfranka control_tools.h isHomogeneousTransformation
 constexpr double kNewtonDamping = 1e-6;        // lambda of the damped Newton step [m or rad]
-constexpr int kMaxNewtonIterations = 20;
+constexpr int kMaxInverseKinematicsIterations = 20;
 constexpr double kProjectionDamping = 1e-3;    // (J J^T + lambda^2 1)^-1 in the null-space projector
 constexpr double kInertiaDamping = 1e-6;       // regularises J M^-1 J^T near singularities
 
@@ -79,7 +79,7 @@ InverseKinematics inverse_kinematics(const Model& model, Data& data, const Trans
     result.orientation_error = error.tail<3>().norm();
     result.converged = result.position_error <= kInverseKinematicsTolerance &&
                        result.orientation_error <= kInverseKinematicsTolerance;
-    if (result.converged || result.iterations == kMaxNewtonIterations || !error.allFinite()) return result;
+    if (result.converged || result.iterations == kMaxInverseKinematicsIterations || !error.allFinite()) return result;
     zero_jacobian(data, Frame::kEndEffector, J);
     for (int c = 0; c < 6; ++c) J6.col(c) = J.col(kFreeJoints[c]);
     const Vector6 step =

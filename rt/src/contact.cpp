@@ -24,7 +24,7 @@ constexpr double kHorizon = 2.0 * kDeltaT;
 constexpr double kLookAhead = 1e-2;
 // Newton steps of the implicit dissipation step before it takes its iterate (a safety net: pressing
 // and sliding take 0 to 4, the tests' impacts on stiff materials up to 11).
-constexpr int kMaxNewtonIterations = 20;
+constexpr int kMaxDissipationIterations = 20;
 
 // The link a capsule's frame moves with (1..7), 0 for the base.
 int link_of(CapsuleFrame frame) {
@@ -256,7 +256,7 @@ Vector7 SceneContact::dissipate(const Data& data, const Matrix7& M, const Vector
     scale += h * (c.elastic_force + c.friction_limit) * c.jacobian.cwiseAbs().maxCoeff();
   Vector7 v = v_start;
   std::optional<double> phi;   // Phi(v), once a line search needs it
-  for (int iteration = 0; iteration < kMaxNewtonIterations; ++iteration) {
+  for (int iteration = 0; iteration < kMaxDissipationIterations; ++iteration) {
     Vector7 gradient = M * (v - v_free);
     Matrix7 hessian = M;
     for (const ContactPoint& c : contacts) {

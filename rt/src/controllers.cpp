@@ -5,15 +5,15 @@
 #include <memory>
 #include <stdexcept>
 
+#include "csp/dynamics/arrays.hpp"
+
 namespace csp::rt {
 namespace {
-
-Vector7 vector_of(const std::array<double, 7>& a) { return Vector7(a.data()); }
 
 // State shared by the built-ins: the robot's model, motion time, the start pose and the reference.
 struct ControllerContext {
   explicit ControllerContext(const Emulator& emulator, const ControllerSpec& spec)
-      : model(emulator.internal_model()), spec(spec), q0(vector_of(emulator.state().q_d)) {}
+      : model(emulator.internal_model()), spec(spec), q0(from_array<Vector7>(emulator.state().q_d)) {}
 
   // Advances time and evaluates the reference trajectory.
   void advance(Duration cycle) {
@@ -52,7 +52,7 @@ class CartesianImpedance {
   }
 
   Command operator()(const RobotState& state) {
-    const Vector7 q = vector_of(state.q), dq = vector_of(state.dq);
+    const Vector7 q = from_array<Vector7>(state.q), dq = from_array<Vector7>(state.dq);
     forward_kinematics(c_.model, c_.data, q);
     const Transform& pose = frame_pose(c_.data, Frame::kStiffness);
     zero_jacobian(c_.data, Frame::kStiffness, jacobian_);
@@ -75,7 +75,7 @@ class CartesianImpedance {
 // tau = K (q_d - q) + D (dq_d - dq) [+ M(q) ddq_d + c(q, dq)]
 Vector7 joint_impedance_torque(const Model& model, Data& data, const ControllerSpec& spec, const Vector7& q_d,
                                const Vector7& dq_d, const Vector7& ddq_d, const RobotState& state) {
-  const Vector7 q = vector_of(state.q), dq = vector_of(state.dq);
+  const Vector7 q = from_array<Vector7>(state.q), dq = from_array<Vector7>(state.dq);
   Vector7 tau = spec.stiffness.cwiseProduct(q_d - q) + spec.damping.cwiseProduct(dq_d - dq);
   if (spec.feedforward) {
     Vector7 inverse_dynamics, gravity;
@@ -92,7 +92,7 @@ BuiltinController make_controller(const ControllerSpec& spec, const ControllerFa
   std::function<Command(const RobotState&)> law;
   ControlMode mode = ControlMode::kTorque;
   if (spec.type == "float") {
-    law = [context](const RobotState& s) { return torque(-context->spec.damping.cwiseProduct(vector_of(s.dq))); };
+    law = [context](const RobotState& s) { return torque(-context->spec.damping.cwiseProduct(from_array<Vector7>(s.dq))); };
   } else if (spec.type == "joint_impedance") {
     law = [context](const RobotState& s) { return joint_impedance(*context, s); };
   } else if (spec.type == "joint_position") {

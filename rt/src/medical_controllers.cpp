@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "csp/dynamics/arrays.hpp"
 #include "csp/rt/emulator.hpp"
 #include "csp/rt/scenario.hpp"
 
@@ -62,7 +63,6 @@ bool BreakthroughDetector::update(double thrust, double feed_velocity, double fe
 
 namespace {
 
-Vector7 vector_of(const std::array<double, 7>& a) { return Vector7(a.data()); }
 Vector3 force_of(const std::array<double, 6>& wrench) { return Vector3(wrench[0], wrench[1], wrench[2]); }
 
 // What every medical law shares: the robot's model at the measured state, the TCP (libfranka's
@@ -77,8 +77,8 @@ class ToolFrameLaw {
   }
 
   void measure(const RobotState& state) {
-    q_ = vector_of(state.q);
-    dq_ = vector_of(state.dq);
+    q_ = from_array<Vector7>(state.q);
+    dq_ = from_array<Vector7>(state.dq);
     forward_kinematics(model_, data_, q_);
     zero_jacobian(data_, Frame::kEndEffector, jacobian_);
     twist_ = jacobian_ * dq_;
@@ -91,7 +91,7 @@ class ToolFrameLaw {
   }
 
   Vector7 limited(const Vector7& tau, const RobotState& state) const {
-    const Vector7 last = vector_of(state.tau_J_d);
+    const Vector7 last = from_array<Vector7>(state.tau_J_d);
     const Vector7 step = model_.parameters().joint_limits.dtau_max * kDeltaT * (1.0 - 1e-6);
     return last + (tau - last).cwiseMax(-step).cwiseMin(step);
   }
@@ -236,7 +236,7 @@ class RcmController {
       const Matrix3x7 shaft_point = law_.point_jacobian(trocar_ + offset);
       const Matrix3 lateral = Matrix3::Identity() - axis * axis.transpose();
       const Vector3 force = -spec_.rcm_stiffness * offset -
-                            2.0 * std::sqrt(spec_.rcm_stiffness) * lateral * (shaft_point * vector_of(state.dq));
+                            2.0 * std::sqrt(spec_.rcm_stiffness) * lateral * (shaft_point * from_array<Vector7>(state.dq));
       tau_cmd += shaft_point.transpose() * force;
     }
     return law_.limited(tau_cmd, state);

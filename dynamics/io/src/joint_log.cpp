@@ -27,12 +27,13 @@ struct Element<std::string> {
   static constexpr int width = 1;
 };
 
-double& number(double& value, int) { return value; }
-double number(const double& value, int) { return value; }
+// The j-th number of one row's element (a scalar, or a vector's entry).
+double& element_number(double& value, int) { return value; }
+double element_number(const double& value, int) { return value; }
 template <int N>
-double& number(Eigen::Matrix<double, N, 1>& value, int j) { return value[j]; }
+double& element_number(Eigen::Matrix<double, N, 1>& value, int j) { return value[j]; }
 template <int N>
-double number(const Eigen::Matrix<double, N, 1>& value, int j) { return value[j]; }
+double element_number(const Eigen::Matrix<double, N, 1>& value, int j) { return value[j]; }
 
 template <class T>
 constexpr int width_of(std::vector<T> JointLog::*) { return Element<T>::width; }
@@ -248,7 +249,7 @@ JointLog read_joint_log_csv(const std::string& path) {
       }
       with_series(log, *column.group, [&](auto& series) {
         if constexpr (!std::is_same_v<typename std::decay_t<decltype(series)>::value_type, std::string>)
-          number(series.back(), column.index) = value;
+          element_number(series.back(), column.index) = value;
       });
     }
     const std::size_t n = log.size();
@@ -275,9 +276,9 @@ void check_joint_log(const JointLog& log) {
       if constexpr (!std::is_same_v<typename std::decay_t<decltype(series)>::value_type, std::string>)
         for (std::size_t k = 0; k < series.size(); ++k)
           for (int j = 0; j < group.width; ++j)
-            if (!std::isfinite(number(series[k], j)))
+            if (!std::isfinite(element_number(series[k], j)))
               throw JointLogError(where(k) + "column `" + column_name(group, j) + "`: expected a finite number, got " +
-                                  number_text(number(series[k], j)));
+                                  number_text(element_number(series[k], j)));
     });
   }
   for (std::size_t k = 1; k < n; ++k)
@@ -326,7 +327,7 @@ void JointLogCsvWriter::write_row(const JointLog& log, std::size_t row) {
         line_ += ',';
       } else {
         for (int j = 0; j < group->width; ++j) {
-          append_number(line_, number(series[row], j));
+          append_number(line_, element_number(series[row], j));
           line_ += ',';
         }
       }

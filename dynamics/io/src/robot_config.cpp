@@ -154,9 +154,6 @@ auto named_sets(const Field& f, std::string& default_name, const std::string& im
   return sets;
 }
 
-Transform rotation_z_translation(double angle, const Vector3& translation) {
-  return {Eigen::AngleAxisd(angle, Vector3::UnitZ()).toRotationMatrix(), translation};
-}
 
 [[noreturn]] void unknown_name(const RobotConfig& config, const std::string& what, const std::string& name,
                                const std::vector<std::string>& known) {
@@ -174,6 +171,12 @@ std::vector<std::string> names_of(const Map& map, const char* implicit = nullptr
 }
 
 }  // namespace
+
+Transform flange_to_tcp(const Field& pose) {
+  pose.allow_only({"rotation_z", "translation"});
+  return {Eigen::AngleAxisd(pose["rotation_z"].number(), Vector3::UnitZ()).toRotationMatrix(),
+          pose["translation"].vector<3>()};
+}
 
 RigidBodyInertia flange_load(const Field& field) {
   field.allow_only({"mass", "com", "inertia"});
@@ -288,14 +291,11 @@ RobotConfig load_robot_config(const std::string& path) {
     const Field ee = end_effectors[name];
     if (name == "none") ee.fail("another name (`none` is built in)");
     ee.allow_only({"source", "F_T_EE", "mass", "com", "inertia"});
-    const Field pose = ee["F_T_EE"];
-    pose.allow_only({"rotation_z", "translation"});
     RigidBodyInertia body{ee["mass"].number(), ee["com"].vector<3>(), inertia_tensor(ee["inertia"])};
     if (body.mass < 0.0) ee["mass"].fail("a non-negative mass");
     if (body.mass > 0.0 && !is_physical_inertia(body.inertia)) ee["inertia"].fail("a physical inertia");
     config.end_effectors.emplace(
-        name, EndEffectorDescription{rotation_z_translation(pose["rotation_z"].number(), pose["translation"].vector<3>()),
-                                     body});
+        name, EndEffectorDescription{flange_to_tcp(ee["F_T_EE"]), body});
   }
 
   const Field limits = top["limits"];

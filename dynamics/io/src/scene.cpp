@@ -90,13 +90,6 @@ ObstacleMotion motion(const Field& f) {
   return {f["amplitude"].vector<3>(), positive(f["frequency_hz"])};
 }
 
-Transform rotation_z_translation(double angle, const Vector3& translation) {
-  Transform t;
-  t.rotation = Eigen::AngleAxisd(angle, Vector3::UnitZ()).toRotationMatrix();
-  t.translation = translation;
-  return t;
-}
-
 Tool tool(const Field& f) {
   f.allow_only({"name", "source", "capsules", "F_T_EE", "mass", "com", "inertia"});
   require_source(f);
@@ -108,9 +101,7 @@ Tool tool(const Field& f) {
     const Field c = capsules[i];
     tool.capsules.push_back({c["name"].text(), capsule(c, {"name", "a", "b", "radius"})});
   }
-  const Field pose = f["F_T_EE"];
-  pose.allow_only({"rotation_z", "translation"});
-  tool.F_T_EE = rotation_z_translation(pose["rotation_z"].number(), pose["translation"].vector<3>());
+  tool.F_T_EE = flange_to_tcp(f["F_T_EE"]);
   const Eigen::Matrix<double, 6, 1> I = f["inertia"].vector<6>();   // xx, xy, xz, yy, yz, zz about the CoM
   tool.inertia.mass = positive(f["mass"]);
   tool.inertia.com = f["com"].vector<3>();

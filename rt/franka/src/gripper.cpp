@@ -8,7 +8,7 @@ namespace franka {
 namespace {
 
 // The research-interface version of the hand's server (libfranka-common gripper kVersion).
-constexpr Gripper::ServerVersion kServerVersion = 3;
+constexpr Gripper::ServerVersion kGripperServerVersion = 3;
 
 }  // namespace
 
@@ -52,7 +52,7 @@ GripperState Gripper::readOnce() const {
   return state;
 }
 
-Gripper::ServerVersion Gripper::serverVersion() const noexcept { return kServerVersion; }
+Gripper::ServerVersion Gripper::serverVersion() const noexcept { return kGripperServerVersion; }
 
 std::ostream& operator<<(std::ostream& ostream, const GripperState& gripper_state) {
   return ostream << "{\"width\": " << gripper_state.width << ", \"max_width\": " << gripper_state.max_width

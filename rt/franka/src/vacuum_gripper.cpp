@@ -8,7 +8,7 @@ namespace franka {
 namespace {
 
 // The research-interface version of the pump's server (libfranka-common vacuum_gripper kVersion).
-constexpr VacuumGripper::ServerVersion kServerVersion = 1;
+constexpr VacuumGripper::ServerVersion kVacuumGripperServerVersion = 1;
 
 double seconds(std::chrono::milliseconds duration) { return std::chrono::duration<double>(duration).count(); }
 
@@ -65,7 +65,7 @@ VacuumGripperState VacuumGripper::readOnce() const {
   return state;
 }
 
-VacuumGripper::ServerVersion VacuumGripper::serverVersion() const noexcept { return kServerVersion; }
+VacuumGripper::ServerVersion VacuumGripper::serverVersion() const noexcept { return kVacuumGripperServerVersion; }
 
 std::ostream& operator<<(std::ostream& ostream, const VacuumGripperState& state) {
   return ostream << "{\"in_control_range\": " << state.in_control_range << ", \"part_detached\": " << state.part_detached

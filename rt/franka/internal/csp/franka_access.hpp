@@ -33,4 +33,9 @@ class EmulatedRobot : public franka::Robot {
   std::shared_ptr<franka::Robot::Impl> impl_;
 };
 
+// The emulated robot with robot time moving only inside calls: bit-reproducible runs.
+struct LockstepRobot : EmulatedRobot {
+  explicit LockstepRobot(const csp::rt::Scenario& scenario) : EmulatedRobot(scenario) { setIdleTimeRuns(false); }
+};
+
 }  // namespace csp::franka_access

@@ -142,4 +142,8 @@ inline double non_negative(const Field& field) {
 // flange frame and inertia about the CoM (xx, xy, xz, yy, yz, zz) [kg m^2], physical when given.
 RigidBodyInertia flange_load(const Field& field);
 
+// A flange -> TCP pose (libfranka's F_T_EE) as the files write it: a rotation about the flange's z
+// [rad] (`rotation_z`) and a translation [m] (`translation`).
+Transform flange_to_tcp(const Field& pose);
+
 }  // namespace csp
