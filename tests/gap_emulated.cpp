@@ -56,7 +56,7 @@ JointLog generate_emulated_log(const Model& model, const gap::InjectedEffects& t
   c.lower_force_acceleration = c.upper_force_acceleration = c.lower_force_nominal = c.upper_force_nominal =
       Vector6::Constant(100.0);
   if (gap::InjectedJointTorque::present(truth)) {
-    settings.extra_joint_torque = [injected = gap::InjectedJointTorque(truth, gap::InjectedJointTorque::Dahl::kWhole)](
+    settings.extra_joint_torque = [injected = gap::InjectedJointTorque(truth, model, gap::InjectedJointTorque::Dahl::kWhole)](
                                       double t, const Vector7& q, const Vector7& dq, const Vector7& tau_motor) mutable {
       return injected(t - kRampIn, q, dq, tau_motor);
     };

@@ -359,26 +359,43 @@ TEST(GapUnexplained, NoiseAloneLeavesNothingAndTheFloorIsTheNoise) {
 
 // The localisation alone, on the residual of a log of the diagnosing model itself (its noise) with
 // structures added: 1.5 % of joint 2's torque on joint 3 (a torque sensor's crosstalk) is localised as
-// joint 2's torque with its gain; a 7 Hz line on joints 1 and 4 in opposite phase is one mode on both,
-// 180 deg apart, on the model's side (the residual = measured - model has it, the measured torque has
-// not); nothing else stands above the floor.
+// joint 2's torque with its gain; a 7 Hz line on joints 1 and 4 in opposite phase, and at 0.02 N m
+// (below what is reported alone) on joint 6 a quarter period behind joint 1, is one mode on the three,
+// with their phases, on the model's side (the residual = measured - model has it, the measured torque
+// has not); two bands of independent noise over 3-4 Hz on joints 2 and 5 (each reported) are no mode:
+// their bands overlap, their residuals are not coherent. Nothing else stands above the floor.
 TEST(GapUnexplained, LocalisesADrivingJointAndASharedMode) {
   const Model model = diagnosing_model();
   const InertialRegressor regressor(model);
   const Part part = evaluate_part(model, regressor, filter_log(plain_log(model, 10.0, 23), FilterOptions{}));
   const auto n = static_cast<Eigen::Index>(part.samples.size());
+  const double sample_period = part.samples.t[1] - part.samples.t[0];
   double mean_torque = 0.0;
   for (const Vector7& tau : part.predicted) mean_torque += tau[1] / static_cast<double>(n);
+  // Independent noise over 3-4 Hz, scaled to `rms`.
+  std::mt19937_64 engine(5);
+  std::normal_distribution<double> normal;
+  auto band_noise = [&](double rms) {
+    Eigen::VectorXd white(n);
+    for (Eigen::Index k = 0; k < n; ++k) white[k] = normal(engine);
+    const auto bin = [&](double hz) { return static_cast<std::size_t>(hz * static_cast<double>(n) * sample_period); };
+    const Eigen::VectorXd band = gap::band_component(white, bin(3.0), bin(4.0));
+    return Eigen::VectorXd(band * rms / std::sqrt(band.squaredNorm() / static_cast<double>(n)));
+  };
+  const Eigen::VectorXd band2 = band_noise(0.3), band5 = band_noise(0.15);
   Eigen::VectorXd left = part.residual;
-  constexpr double kGain = 0.015, kLine = 0.3, kFrequency = 7.0;
+  constexpr double kGain = 0.015, kLine = 0.3, kWeakLine = 0.02, kFrequency = 7.0;
   for (Eigen::Index k = 0; k < n; ++k) {
-    const double t = part.samples.t[static_cast<std::size_t>(k)];
+    const double t = part.samples.t[static_cast<std::size_t>(k)], phase = 2.0 * M_PI * kFrequency * t;
     left[kNumJoints * k + 2] += kGain * (part.predicted[static_cast<std::size_t>(k)][1] - mean_torque);
-    left[kNumJoints * k + 0] += kLine * std::sin(2.0 * M_PI * kFrequency * t);
-    left[kNumJoints * k + 3] -= kLine * std::sin(2.0 * M_PI * kFrequency * t);
+    left[kNumJoints * k + 0] += kLine * std::sin(phase);
+    left[kNumJoints * k + 3] -= kLine * std::sin(phase);
+    left[kNumJoints * k + 5] += kWeakLine * std::sin(phase - M_PI / 2.0);
+    left[kNumJoints * k + 1] += band2[k];
+    left[kNumJoints * k + 4] += band5[k];
   }
   const Localisation localised = localise_unexplained(part, left, {});
-  int driven = 0, mode = 0;
+  int driven = 0, mode = 0, bands = 0;
   for (const UnexplainedStructure& u : localised.structures) {
     std::cout << u.detail << '\n';
     if (u.joint == 3) {
@@ -386,20 +403,34 @@ TEST(GapUnexplained, LocalisesADrivingJointAndASharedMode) {
       EXPECT_EQ(u.kind, "torque_of_joint");
       EXPECT_EQ(u.from_joint, 2);
       EXPECT_NEAR(u.value, kGain, 0.1 * kGain);
+    } else if (u.joint == 2 || u.joint == 5) {
+      ++bands;
+      EXPECT_LE(u.band_low, 3.1) << u.detail;
+      EXPECT_GE(u.band_high, 3.9) << u.detail;
+      EXPECT_TRUE(u.mode_joints.empty()) << "independent noise is no mode: " << u.detail;
     } else {
       ++mode;
       ASSERT_TRUE(u.joint == 1 || u.joint == 4) << u.detail;
       EXPECT_EQ(u.kind, "time_periodic");
       EXPECT_NEAR(u.value, kFrequency, 0.05);
-      ASSERT_EQ(u.mode_joints, (std::vector<int>{1, 4}));
-      const double other = u.mode_phase_deg[u.joint == 1 ? 1 : 0];
-      EXPECT_NEAR(std::abs(other), 180.0, 5.0);
+      ASSERT_EQ(u.mode_joints, (std::vector<int>{1, 4, 6})) << u.detail;
+      // Phases relative to this joint: joint 1 and 4 opposite, joint 6 a quarter period behind joint 1.
+      const double four = u.mode_phase_deg[1], six = u.mode_phase_deg[2];
+      const double one = u.mode_phase_deg[0];
+      EXPECT_NEAR(std::abs(std::remainder(four - one, 360.0)), 180.0, 5.0) << u.detail;
+      EXPECT_NEAR(std::remainder(six - one, 360.0), -90.0, 15.0) << u.detail;
+      // Coherence SNR / (1 + SNR) in the band: near 1 for the large lines; joint 6's 0.02 N m line
+      // against its 0.018 N m floor stands at about 0.85.
+      EXPECT_GT(u.mode_coherence[0], 0.95) << u.detail;
+      EXPECT_GT(u.mode_coherence[1], 0.95) << u.detail;
+      EXPECT_GT(u.mode_coherence[2], 0.6) << u.detail;
       // Added to the residual only, so it lies in what the model side carries.
       EXPECT_EQ(u.side, kModelInput);
     }
   }
   EXPECT_EQ(driven, 1);
   EXPECT_EQ(mode, 2);
+  EXPECT_EQ(bands, 2);
 }
 
 // The real Panda log (an excitation of Gaz et al.'s, 21 s, diagnosed as `csp gap` does): at least 80 %

@@ -77,7 +77,7 @@ InjectedEffects realistic_effect(const std::string& name, const Model& model, un
   return truth;
 }
 
-InjectedEffects outside_library_effect(const std::string& kind, unsigned seed) {
+InjectedEffects outside_library_effect(const std::string& kind, const Model& model, unsigned seed) {
   std::mt19937_64 engine(seed);
   InjectedEffects truth;
   // A vibration of joint 1 + (seed + shift) % 7, amplitude [N m] and frequency [Hz] drawn uniformly.
@@ -103,6 +103,17 @@ InjectedEffects outside_library_effect(const std::string& kind, unsigned seed) {
     truth.ringing_amplitude = uniform(engine, 0.5, 1.0);
     truth.ringing_frequency = uniform(engine, 5.0, 8.0);
     truth.ringing_decay = uniform(engine, 0.2, 0.4);
+  } else if (kind == "position_catch") {
+    const JointLimits& limits = model.parameters().joint_limits;
+    const int j = static_cast<int>((seed + 4) % kNumJoints);
+    truth.catch_joint = j + 1;
+    truth.catch_amplitude = uniform(engine, 1.0, 2.0);
+    truth.catch_position = 0.5 * (limits.q_min[j] + limits.q_max[j]) + uniform(engine, -0.1, 0.1) * (limits.q_max[j] - limits.q_min[j]);
+    truth.catch_width = uniform(engine, 0.06, 0.1);
+  } else if (kind == "base_shake") {
+    const double direction = uniform(engine, 0.0, 2.0 * M_PI);
+    truth.base_shake = uniform(engine, 0.3, 0.5) * Vector3(std::cos(direction), std::sin(direction), 0.0);
+    truth.base_shake_frequency = uniform(engine, 6.0, 9.0);
   } else {
     throw std::invalid_argument("unknown outside-library effect `" + kind + "`");
   }
@@ -126,6 +137,7 @@ InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b) {
   m.tilt_x += b.tilt_x, m.tilt_y += b.tilt_y, m.delay += b.delay;
   if (b.links) m.links = b.links;
   m.sensor_gain += b.sensor_gain;
+  if (!b.base_shake.isZero()) m.base_shake = b.base_shake, m.base_shake_frequency = b.base_shake_frequency;
   if (!b.ripple_amplitude.isZero())
     m.ripple_amplitude = b.ripple_amplitude, m.ripple_period = b.ripple_period, m.ripple_phase = b.ripple_phase;
   if (!b.breakaway_excess.isZero()) m.breakaway_excess = b.breakaway_excess, m.stribeck_velocity = b.stribeck_velocity;
@@ -140,6 +152,9 @@ InjectedEffects merged(const InjectedEffects& a, const InjectedEffects& b) {
   if (b.ringing_joint)
     m.ringing_joint = b.ringing_joint, m.ringing_amplitude = b.ringing_amplitude,
     m.ringing_frequency = b.ringing_frequency, m.ringing_decay = b.ringing_decay;
+  if (b.catch_joint)
+    m.catch_joint = b.catch_joint, m.catch_amplitude = b.catch_amplitude, m.catch_position = b.catch_position,
+    m.catch_width = b.catch_width;
   if (b.velocity_ripple_joint)
     m.velocity_ripple_joint = b.velocity_ripple_joint, m.velocity_ripple_amplitude = b.velocity_ripple_amplitude,
     m.velocity_ripple_frequency = b.velocity_ripple_frequency;
@@ -192,9 +207,18 @@ ModelParameters truth_parameters(const Model& model, const InjectedEffects& trut
   return p;
 }
 
+InjectedJointTorque::InjectedJointTorque(const InjectedEffects& truth, const Model& model, Dahl dahl)
+    : truth_(truth), dahl_(dahl) {
+  if (truth.base_shake.isZero()) return;
+  ModelParameters shaken = truth_parameters(model, truth);
+  shaken.gravity = -truth.base_shake;
+  shaken_.emplace(shaken);
+}
+
 bool InjectedJointTorque::present(const InjectedEffects& truth) {
   return !truth.ripple_amplitude.isZero() || !truth.hysteresis_amplitude.isZero() || !truth.load_friction.isZero() ||
-         truth.vibration_joint != 0 || truth.ringing_joint != 0 || truth.friction_trend != 0.0;
+         truth.vibration_joint != 0 || truth.ringing_joint != 0 || truth.catch_joint != 0 ||
+         !truth.base_shake.isZero() || truth.friction_trend != 0.0;
 }
 
 Vector7 InjectedJointTorque::operator()(double t, const Vector7& q, const Vector7& dq, const Vector7& tau_transmitted) {
@@ -215,6 +239,11 @@ Vector7 InjectedJointTorque::operator()(double t, const Vector7& q, const Vector
     tau[j] += truth_.ringing_amplitude * std::exp(-since / truth_.ringing_decay) *
               std::sin(2.0 * M_PI * truth_.ringing_frequency * since);
   }
+  if (truth_.catch_joint) {
+    const int j = truth_.catch_joint - 1;
+    const double from = (q[j] - truth_.catch_position) / truth_.catch_width;
+    if (std::abs(from) < 0.5) tau[j] -= truth_.catch_amplitude * std::copysign(std::pow(std::cos(M_PI * from), 2), dq[j]);
+  }
   // The added friction's change since the log began (on the emulated robot, its plant's friction is
   // the added one at t = 0).
   tau += truth_.friction_trend * t * friction_torque(truth_.friction, dq);
@@ -225,6 +254,11 @@ Vector7 InjectedJointTorque::operator()(double t, const Vector7& q, const Vector
     double amplitude = truth_.vibration_amplitude * (1.0 + truth_.vibration_configuration * std::cos(2.0 * q[1]));
     if (truth_.vibration_speed > 0.0) amplitude *= std::abs(dq[j]) / truth_.vibration_speed;
     tau[j] += amplitude * std::sin(2.0 * M_PI * truth_.vibration_frequency * t);
+  }
+  if (shaken_) {
+    Vector7 g;
+    gravity_torque(*shaken_, data_, q, g);
+    tau += g * std::sin(2.0 * M_PI * truth_.base_shake_frequency * t);
   }
   return tau;
 }
@@ -246,7 +280,7 @@ JointLog generate_log(const Model& model, const InjectedEffects& truth, unsigned
   log.source = "generated (trajectory seed " + std::to_string(trajectory_seed) + ")";
   Data data;
   const double dt = 1.0 / options.rate;
-  InjectedJointTorque injected(truth);
+  InjectedJointTorque injected(truth, model);
   for (double t = 0.0; t <= options.duration; t += dt * (1.0 + uniform(engine, -0.1, 0.1))) {
     Vector7 q, dq, ddq, rigid;
     trajectory.state(t, q, dq, ddq);

@@ -1,6 +1,7 @@
 #include "csp/gap/spectrum.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <unsupported/Eigen/FFT>
@@ -53,6 +54,44 @@ Periodogram welch(const Eigen::VectorXd& series, double sample_period, Eigen::In
   }
   for (double& bin : average.power) bin /= count;
   return average;
+}
+
+Coherence band_coherence(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double sample_period, double low,
+                         double high, int segments) {
+  const Eigen::Index length = std::min(a.size(), b.size()) / segments;
+  Coherence c;
+  if (length < 8) return c;
+  const double bin_width = 1.0 / (static_cast<double>(length) * sample_period);
+  const auto nearest = [&](double hz) { return static_cast<std::size_t>(std::max(0.0, std::round(hz / bin_width))); };
+  const std::size_t first = std::max<std::size_t>(1, nearest(low)),
+                    last = std::min(std::max(first, nearest(high)), static_cast<std::size_t>(length / 2));
+  Eigen::FFT<double> fft;
+  std::complex<double> ab = 0.0;
+  double aa = 0.0, bb = 0.0;
+  for (int s = 0; s < segments; ++s) {
+    std::array<std::vector<std::complex<double>>, 2> spectra;
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::VectorXd x = (side == 0 ? a : b).segment(s * length, length);
+      const double mean = x.mean();
+      std::vector<double> windowed(static_cast<std::size_t>(length));
+      for (Eigen::Index i = 0; i < length; ++i)
+        windowed[static_cast<std::size_t>(i)] =
+            (0.5 - 0.5 * std::cos(2.0 * M_PI * static_cast<double>(i) / static_cast<double>(length - 1))) * (x[i] - mean);
+      fft.fwd(spectra[static_cast<std::size_t>(side)], windowed);
+    }
+    for (std::size_t k = first; k <= last; ++k) {
+      ab += spectra[1][k] * std::conj(spectra[0][k]);
+      aa += std::norm(spectra[0][k]), bb += std::norm(spectra[1][k]);
+    }
+  }
+  c.magnitude_squared = aa > 0.0 && bb > 0.0 ? std::norm(ab) / (aa * bb) : 0.0;
+  c.phase = std::arg(ab);
+  c.independent = segments * static_cast<int>((last - first) / 2 + 1);
+  return c;
+}
+
+double coherence_threshold(int independent, double false_alarm) {
+  return independent < 2 ? 1.0 : 1.0 - std::pow(false_alarm, 1.0 / (independent - 1));
 }
 
 Eigen::VectorXd band_component(const Eigen::VectorXd& series, std::size_t low, std::size_t high) {

@@ -250,8 +250,10 @@ std::string describe(const UnexplainedStructure& u, const std::vector<std::strin
                                : "in the measured torque";
   std::string mode;
   for (std::size_t m = 0; m < u.mode_joints.size(); ++m)
-    mode += format("%s%d (%.0f deg)", m == 0 ? "; the same band on joints " : ", ", u.mode_joints[m],
-                   u.mode_phase_deg[m]);
+    mode += u.mode_joints[m] == u.joint
+                ? format("%s%d", m == 0 ? "; coherent in its band on joints " : ", ", u.mode_joints[m])
+                : format("%s%d (%.0f deg, coherence %.2f)", m == 0 ? "; coherent in its band on joints " : ", ",
+                         u.mode_joints[m], u.mode_phase_deg[m], u.mode_coherence[m]);
   if (!mode.empty()) what += mode + ": one mode";
   const std::string effect = library_effect_of(u.kind);
   std::string tail = "no library effect";
@@ -314,30 +316,30 @@ Floor noise_floor(const Samples& s, const Periodogram& p, const VectorXd& measur
 }
 
 // A band standing on several joints at once is one mode of the arm (or of the model's inputs) seen on
-// each: the spectral structures whose bands overlap are grouped, and each gets the group's joints and
-// their phases at its peak (the least-squares sinusoid's) relative to its own.
-bool spectral(const UnexplainedStructure& u) { return u.band_high > 0.0 && u.kind != "transient"; }
+// each. Each spectral structure's residual is compared with every other joint's in its band by their
+// coherence (Welch, kModeSegments stretches): the joints whose coherence noise would exceed with
+// probability kModeFalseAlarm at most share the mode, also where it stays below their own floor's
+// detection; each with its phase relative to the structure's joint and its coherence. A structure
+// that follows the motion is left alone: every joint moves at the motion's frequencies.
+constexpr int kModeSegments = 8;
+constexpr double kModeFalseAlarm = 1e-3;
 void shared_modes(std::vector<UnexplainedStructure>& structures, const std::array<VectorXd, kNumJoints>& residuals,
-                  const VectorXd& t) {
+                  double sample_period) {
   for (UnexplainedStructure& u : structures) {
-    if (!spectral(u)) continue;
-    // Each joint's phase at the peak: its residual's least-squares a sin(w t) + b cos(w t) = A sin(w t + phi).
-    const auto qr = sinusoid_columns(t, u.value).colPivHouseholderQr();
-    auto phase = [&](int joint) {
-      const Eigen::Vector2d ab = qr.solve(residuals[static_cast<std::size_t>(joint - 1)]);
-      return std::atan2(ab[1], ab[0]) * 180.0 / M_PI;
-    };
+    if (u.band_high <= 0.0 || u.kind == "motion_periodic") continue;
+    const VectorXd& own = residuals[static_cast<std::size_t>(u.joint - 1)];
     std::vector<int> joints;
-    for (const UnexplainedStructure& other : structures)
-      if (spectral(other) && other.band_low <= u.band_high && u.band_low <= other.band_high &&
-          std::find(joints.begin(), joints.end(), other.joint) == joints.end())
-        joints.push_back(other.joint);
+    std::vector<double> phases, coherences;
+    for (int joint = 1; joint <= kNumJoints; ++joint) {
+      const Coherence c = band_coherence(own, residuals[static_cast<std::size_t>(joint - 1)], sample_period,
+                                         u.band_low, u.band_high, kModeSegments);
+      if (joint != u.joint && c.magnitude_squared <= coherence_threshold(c.independent, kModeFalseAlarm)) continue;
+      joints.push_back(joint);
+      phases.push_back(joint == u.joint ? 0.0 : c.phase * 180.0 / M_PI);
+      coherences.push_back(joint == u.joint ? 1.0 : c.magnitude_squared);
+    }
     if (joints.size() < 2) continue;
-    std::sort(joints.begin(), joints.end());
-    const double own = phase(u.joint);
-    u.mode_joints = joints, u.mode_phase_deg.clear();
-    for (int joint : joints)
-      u.mode_phase_deg.push_back(std::remainder(phase(joint) - own, 360.0));
+    u.mode_joints = joints, u.mode_phase_deg = phases, u.mode_coherence = coherences;
   }
 }
 
@@ -434,7 +436,7 @@ Localisation localise_unexplained(const Part& part, const VectorXd& left, const 
       rest -= best.torque;
     }
   }
-  shared_modes(out.structures, residuals, t);
+  shared_modes(out.structures, residuals, sample_period);
   for (UnexplainedStructure& u : out.structures) u.detail = describe(u, causes);
   std::sort(out.structures.begin(), out.structures.end(), [](const auto& a, const auto& b) { return a.size > b.size; });
   return out;

@@ -66,19 +66,25 @@ struct UnexplainedStructure {
   int joint = 0;        // 1-based
   std::string kind;     // offset, time_drift, position_periodic, velocity_sign, velocity, hysteresis,
                         // acceleration, torque_level, torque_of_joint, velocity_of_joint,
-                        // position_of_joint, time_periodic, motion_periodic, band, transient
+                        // position_of_joint, time_periodic, motion_periodic, band, transient,
+                        // reversal_event, position_event (events.hpp)
   double size = 0.0;    // RMS of the structure's torque [N m]
   double share = 0.0;   // of the joint's remaining held-out mean square it accounts for
-  double value = 0.0;   // the structure's parameter: period [rad], frequency [Hz], slope, start [s] ...
+  double value = 0.0;   // the structure's parameter: period [rad], frequency [Hz], slope, start [s],
+                        // the share of reversals with a burst, the position of the bursts [rad] ...
   double floor_multiple = 0.0;             // size / what the noise floor alone puts in the same kind (band)
   double band_low = 0.0, band_high = 0.0;  // [Hz] the band of the spectral kinds (0 for the others)
   std::string side;     // measured_torque (a torque the robot has and the model lacks, or the sensor's)
                         // or model_input (in the model's prediction: the noise its inputs carry in)
-  int from_joint = 0;   // torque_of_joint, velocity_of_joint, position_of_joint: the joint driving it
-  // A band standing at the same frequency on several joints (a shared mode): those joints, this one
-  // included, and each one's phase at the peak relative to this one's [deg]; empty when on this alone.
+  int from_joint = 0;   // torque_of_joint, velocity_of_joint, position_of_joint: the joint driving it;
+                        // reversal_event, position_event: the joint whose motion it follows
+  std::vector<double> times;  // reversal_event, position_event: each burst [s], in its part's time
+  // A band shared with other joints (one mode): the joints whose residual is coherent with this one's
+  // in its band, this one included (also those where it stays below what is reported alone), each
+  // one's phase relative to this one's [deg] and coherence; empty when on this joint alone.
   std::vector<int> mode_joints;
   std::vector<double> mode_phase_deg;
+  std::vector<double> mode_coherence;  // magnitude-squared coherence with `joint` in the band (1 for itself)
   std::string detail;   // one plain sentence
 };
 inline constexpr const char* kMeasuredTorque = "measured_torque";

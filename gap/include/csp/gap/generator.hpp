@@ -44,6 +44,17 @@ struct InjectedEffects {
   // amplitude [N m] at the reversal, frequency [Hz], decay time [s]);
   int ringing_joint = 0;                                          // 1..7; 0 = none
   double ringing_amplitude = 0.0, ringing_frequency = 0.0, ringing_decay = 0.0;
+  // a catch of one joint at one position (a cable or hose that snags there, a damaged tooth): a
+  // bump against the motion, -catch_amplitude sgn(dq) cos^2(pi (q - catch_position) / catch_width)
+  // within catch_width / 2 of the position;
+  int catch_joint = 0;                                            // 1..7; 0 = none
+  double catch_amplitude = 0.0, catch_position = 0.0, catch_width = 0.0;  // [N m], [rad], [rad]
+  // the base shaken along a horizontal direction (the table or cart a machine beside it sets
+  // vibrating): its acceleration a(t) = base_shake sin(2 pi base_shake_frequency t) acts on every link
+  // as a gravity of -a(t) (the base frame is not inertial), so each joint's sensor reads the gravity
+  // torque of that field: one mode on several joints, its amplitude following the configuration;
+  Vector3 base_shake = Vector3::Zero();                           // [m/s^2] amplitude per base axis
+  double base_shake_frequency = 0.0;                              // [Hz]
   // and a ripple of a velocity sensor: the logged dq of one joint reads a sinusoid the motion has not.
   int velocity_ripple_joint = 0;                                  // 1..7; 0 = none
   double velocity_ripple_amplitude = 0.0, velocity_ripple_frequency = 0.0;  // [rad/s], [Hz]
@@ -58,8 +69,12 @@ InjectedEffects realistic_effect(const std::string& name, const Model& model, un
 // - "speed_rumble": 0.5-0.8 N m per rad/s at 6-9 Hz on joint 1 + (seed + 5) % 7;
 // - "velocity_sensor_ripple": 0.01-0.02 rad/s at 8-12 Hz in the velocity of joint 1 + seed % 4;
 // - "reversal_ringing": 0.5-1 N m at 5-8 Hz decaying over 0.2-0.4 s after each velocity reversal of
-//   joint 1 + (seed + 2) % 7.
-InjectedEffects outside_library_effect(const std::string& kind, unsigned seed);
+//   joint 1 + (seed + 2) % 7;
+// - "position_catch": 1-2 N m over 0.06-0.1 rad at a position within 10 % of the range of the middle
+//   of joint 1 + (seed + 4) % 7's limits (the excitation's centre, which it crosses again and again);
+// - "base_shake": the base shaken at 6-9 Hz with 0.3-0.5 m/s^2 along a horizontal direction drawn
+//   uniformly.
+InjectedEffects outside_library_effect(const std::string& kind, const Model& model, unsigned seed);
 // What the velocity sensors read beyond the motion's dq at time t.
 Vector7 velocity_sensor_error(const InjectedEffects& truth, double t);
 // Both injections (each sets different fields).
@@ -71,7 +86,7 @@ ModelParameters truth_parameters(const Model& model, const InjectedEffects& trut
 
 // The injected effects that are physical joint torques beyond a rigid-body model with sliding and
 // static friction: position ripple, Dahl hysteresis, load-dependent friction, the added friction's
-// trend and the outside-library vibration. Both generators use it: the dynamics core's adds it to the truth's inverse dynamics, the
+// trend and the outside-library vibration, ringing, catch and base shake. Both generators use it: the dynamics core's adds it to the truth's inverse dynamics, the
 // emulated robot's plant takes it as its extra joint torque (csp::rt::PlantTorque). Allocation-free.
 class InjectedJointTorque {
  public:
@@ -79,8 +94,8 @@ class InjectedJointTorque {
   // law, amplitude (z - sgn(dq))), or whole (amplitude z: the physical friction, passive, which a
   // plant integrated in closed loop needs; the excess alone is an anti-friction near rest).
   enum class Dahl { kBeyondSliding, kWhole };
-  explicit InjectedJointTorque(const InjectedEffects& truth, Dahl dahl = Dahl::kBeyondSliding)
-      : truth_(truth), dahl_(dahl) {}
+  // `model` is the diagnosing model (the truth's rigid body, for the base shake).
+  InjectedJointTorque(const InjectedEffects& truth, const Model& model, Dahl dahl = Dahl::kBeyondSliding);
   // At time t [s] and joint state (q, dq), tau_transmitted the torque the gears transmit. Calls
   // follow the motion in time: each advances Dahl's friction state from the last call's position.
   Vector7 operator()(double t, const Vector7& q, const Vector7& dq, const Vector7& tau_transmitted);
@@ -90,6 +105,8 @@ class InjectedJointTorque {
  private:
   InjectedEffects truth_;
   Dahl dahl_;
+  std::optional<Model> shaken_;  // the truth's arm under a gravity of -base_shake (its torque per unit sin)
+  Data data_;
   bool started_ = false;
   Vector7 z_ = Vector7::Zero(), q_previous_ = Vector7::Zero();  // Dahl's state and where it was
   double last_reversal_ = -1e9, dq_previous_ = 0.0;             // of the ringing joint [s], [rad/s]

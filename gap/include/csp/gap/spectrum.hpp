@@ -35,6 +35,24 @@ Periodogram welch(const Eigen::VectorXd& series, double sample_period, Eigen::In
 // with a sharp edge, zero phase.
 Eigen::VectorXd band_component(const Eigen::VectorXd& series, std::size_t low, std::size_t high);
 
+// The coherence of two series in the band [low, high] Hz: their cross-spectrum by Welch's method
+// over `segments` non-overlapping Hann-windowed stretches, summed over the band's bins (at least the
+// one nearest to it): |S_ab|^2 / (S_aa S_bb) in [0, 1], and b's phase relative to a's [rad].
+// `independent` counts the (stretch, bin) pairs that are independent for noise (every other bin: a
+// Hann window's bins share half their power with their neighbours).
+struct Coherence {
+  double magnitude_squared = 0.0;
+  double phase = 0.0;
+  int independent = 0;
+};
+Coherence band_coherence(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double sample_period, double low,
+                         double high, int segments);
+
+// What the magnitude-squared coherence of two independent Gaussian noises exceeds with probability
+// `false_alarm`, estimated from `independent` pairs: 1 - false_alarm^(1 / (independent - 1)) (its
+// distribution is Beta(1, independent - 1); Carter 1987). 1 when independent < 2: nothing is shown.
+double coherence_threshold(int independent, double false_alarm);
+
 // The scale c of a noise floor c shape[k] (shape: the expected bins of a unit noise), measured at
 // `above` [Hz] and beyond, where the motion has no power (the excitation ends at about 2 Hz): the
 // median of power / shape over those bins, divided by ln 2 (a bin of Gaussian noise is exponentially
