@@ -436,7 +436,8 @@ std::vector<Transient> find_transients(const std::array<const Part*, 2>& parts,
 void keep_recurring(const std::vector<MotionEvent>& events, const std::array<const Part*, 2>& parts,
                     std::vector<Transient>& transients, std::array<std::vector<bool>, 2>& steady) {
   std::erase_if(transients, [&](const Transient& t) {
-    return std::any_of(events.begin(), events.end(), [&](const MotionEvent& e) { return has_burst_within(e, t.heldout, t.start, t.end); });
+    return std::any_of(events.begin(), events.end(),
+                       [&](const MotionEvent& e) { return has_burst_within(e, t.heldout, t.start, t.end); });
   });
   for (std::size_t p = 0; p < 2; ++p)
     for (std::size_t k = 0; k < parts[p]->samples.size(); ++k) {
@@ -449,11 +450,11 @@ void keep_recurring(const std::vector<MotionEvent>& events, const std::array<con
 
 // Bursts at a joint's own reversals are also what a fitted friction law leaves when the robot's
 // differs from it near zero velocity (a presliding lag or a breakaway of another width than the
-// library's; on the library's own effects they reach 10 times the noise floor, on the emulated
-// robot's Dahl friction). With a friction effect among the causes (of the first selection: the
-// events decide which transients it runs again without) the two cannot be told apart by where the
-// bursts are, so they are left to that effect; a ringing above the excitation band is still
-// localised by its band (docs/gap.md, "Events").
+// library's: 2.5-4.7 times the noise floor on the blind logs of the library's own friction effects,
+// 9.7 times on the emulated robot's Dahl friction). With a friction effect among the causes (of the
+// first selection: the events decide which transients it runs again without; and of the verdict)
+// the two cannot be told apart by where the bursts are, so they are left to that effect; a ringing
+// above the excitation band is still localised by its band (docs/gap.md, "Events").
 bool friction_at_own_reversals(const MotionEvent& e, const std::vector<std::string>& causes) {
   const bool friction = std::any_of(causes.begin(), causes.end(), [](const std::string& c) {
     return c == "joint_friction" || c == "static_friction" || c == "friction_hysteresis" ||
@@ -469,19 +470,20 @@ UnexplainedStructure event_structure(const MotionEvent& e, const std::array<Nois
   u.value = reversal ? static_cast<double>(e.covered) / std::max(e.occasions, 1) : e.position;
   const double rms = floor[static_cast<std::size_t>(e.joint - 1)].rms;
   u.floor_multiple = rms > 0.0 ? e.size / rms : 0.0, u.side = kMeasuredTorque, u.from_joint = e.from_joint;
-  u.times = e.times;
+  u.times = e.times, u.times_in_heldout = e.in_heldout;
   std::string when;
   for (std::size_t i = 0; i < e.times.size() && i < 6; ++i) when += format("%s%.2f", i ? ", " : "", e.times[i]);
   if (e.times.size() > 6) when += ", ...";
-  const std::string what = reversal ? format("%zu of them, at %d of the %d velocity reversals of joint %d", e.times.size(),
-                                             e.covered, e.occasions, e.from_joint)
+  const std::string what = reversal ? format("%zu of them, at %d of the %d velocity reversals of joint %d",
+                                             e.times.size(), e.covered, e.occasions, e.from_joint)
                                     : format("%zu of them, at %d of the %d passes of joint %d through %.3f rad",
                                              e.times.size(), e.covered, e.occasions, e.from_joint, e.position);
-  u.detail = format("joint %d: bursts of %.3f N m, %.1f times the noise there, %s (t = %s s in the training and the "
-                    "held-out part; %.0f %% of what is left "
-                    "on it); recurring with the motion, no library effect (%s?); the selection kept it",
+  u.detail = format("joint %d: bursts of %.3f N m, %.1f times the noise there, %s (t = %s s in the training and "
+                    "the held-out part; %.0f %% of what is left on it); recurring with the motion, no library effect "
+                    "(%s?); the selection kept it",
                     e.joint, e.size, u.floor_multiple, what.c_str(), when.c_str(), 100.0 * e.share,
-                    reversal ? "backlash, a knock or ringing as the gears reverse" : "a cable or hose that catches, a damaged tooth");
+                    reversal ? "backlash, a knock or ringing as the gears reverse"
+                             : "a cable or hose that catches, a damaged tooth");
   return u;
 }
 
@@ -583,40 +585,76 @@ void backward_check(EffectSet& selected, SetFit& current, const Part& train, con
   }
 }
 
+// Where effect `name` sits in `selected`: its index and its parameters' offset in the set's theta.
+std::optional<std::pair<std::size_t, Eigen::Index>> position_of(const EffectSet& selected, const std::string& name) {
+  Eigen::Index offset = 0;
+  for (std::size_t index = 0; index < selected.size(); offset += selected[index]->size(), ++index)
+    if (selected[index]->name() == name) return std::make_pair(index, offset);
+  return std::nullopt;
+}
+
+// Replaces selected[index] (its parameters at `offset`) by `constrained`, started from what the
+// replaced one explained on `train`, and refits the set. The first such refit records what the
+// unconstrained set left of `whole_heldout` (Diagnosis::unconstrained_unexplained_fraction).
+void refit_constrained(EffectSet& selected, SetFit& current, std::size_t index, Eigen::Index offset,
+                       const Effect* constrained, const Part& train, const Part& heldout, const Part& whole_heldout,
+                       FitControl control, Diagnosis& d) {
+  const Effect* free = selected[index];
+  const Eigen::Index after = offset + free->size();
+  EffectSet refitted = selected;
+  refitted[index] = constrained;
+  VectorXd start(set_size(refitted));
+  const VectorXd explained = free->torque(train, current.theta.segment(offset, free->size()));
+  start << current.theta.head(offset), constrained->initial_guess(train, explained),
+      current.theta.tail(current.theta.size() - after);
+  if (std::isnan(d.unconstrained_unexplained_fraction))
+    d.unconstrained_unexplained_fraction =
+        (whole_heldout.residual - set_torque(selected, whole_heldout, current.theta)).squaredNorm() /
+        whole_heldout.residual.squaredNorm();
+  selected = refitted;
+  current = fit_set(selected, train, heldout, start, control);
+}
+
 // Physically consistent fits (docs/gap.md): when the causes' linear inertial fit has no physical
 // realisation, they are refitted with inertial_parameters over physical links (`physical`, made
 // here: the log-Cholesky parametrisation about the model's own links) and the verdict is that fit.
-// Records what the linear fit left of `whole_heldout` (Diagnosis::unconstrained_unexplained_fraction).
 void refit_over_physical_links(const Model& model, EffectSet& selected, SetFit& current,
                                std::unique_ptr<Effect>& physical, const Part& train, const Part& heldout,
                                const Part& whole_heldout, const DiagnosisOptions& options, Diagnosis& d) {
-  std::size_t index = 0;
-  Eigen::Index offset = 0;
-  for (; index < selected.size() && selected[index]->name() != "inertial_parameters"; ++index)
-    offset += selected[index]->size();
-  if (index == selected.size()) return;
-  const Effect* linear = selected[index];
-  const Eigen::Index after = offset + linear->size();
-  if (linear->consistency(current.theta.segment(offset, linear->size())).at("realisation_physically_consistent"))
+  const auto at = position_of(selected, "inertial_parameters");
+  if (!at) return;
+  const Effect* linear = selected[at->first];
+  if (linear->consistency(current.theta.segment(at->second, linear->size())).at("realisation_physically_consistent"))
     return;
   physical = physical_inertial_parameters(model);
   if (!physical) return;  // the model's own links are not physical: the warnings say what the fit is
   report(options.progress, "refitting the inertial parameters over physical links", 0, 0);
-  EffectSet constrained = selected;
-  constrained[index] = physical.get();
-  VectorXd start(set_size(constrained));
-  // From what the linear fit explained, moved to physical links.
-  const VectorXd explained = linear->torque(train, current.theta.segment(offset, linear->size()));
-  start << current.theta.head(offset), physical->initial_guess(train, explained),
-      current.theta.tail(current.theta.size() - after);
-  d.unconstrained_unexplained_fraction =
-      (whole_heldout.residual - set_torque(selected, whole_heldout, current.theta)).squaredNorm() /
-      whole_heldout.residual.squaredNorm();
-  selected = constrained;
   // 70 parameters of which 43 are identifiable, in a slow valley along the physical boundary: on the
   // real log the selection's stopping rule (1e-5) left 21.6 % of the held-out gap from the model's
   // links, where the converged fit leaves 19.5 %; from this start 1e-7 gives 19.6 % in 0.4 s.
-  current = fit_set(selected, train, heldout, start, {200, 1e-7});
+  refit_constrained(selected, current, at->first, at->second, physical.get(), train, heldout, whole_heldout,
+                    {200, 1e-7}, d);
+}
+
+// Friction of the sign physics allows (docs/gap.md): a passive joint's viscous friction is never
+// negative. When a fitted viscous coefficient makes a joint's total (the model's own plus the fit)
+// negative, the causes are refitted with joint_friction's viscous coefficients kept at or above minus
+// the model's own (`physical`, made here). Linear in each coefficient, the fit's optimum then lies on
+// that bound for the joints whose free fit was below it.
+void refit_friction_above_zero(const Model& model, EffectSet& selected, SetFit& current,
+                               std::unique_ptr<Effect>& physical, const Part& train, const Part& heldout,
+                               const Part& whole_heldout, const DiagnosisOptions& options, Diagnosis& d) {
+  const auto at = position_of(selected, "joint_friction");
+  if (!at) return;
+  const FrictionModel& own = model.parameters().friction;
+  const Vector7 own_viscous = own.type == FrictionModel::Type::kLinear ? own.viscous : Vector7::Zero();
+  bool negative = false;
+  for (int j = 0; j < kNumJoints; ++j)
+    negative = negative || own_viscous[j] + current.theta[at->second + 4 * j + 3] < 0.0;
+  if (!negative) return;
+  physical = joint_friction_above(-own_viscous);
+  report(options.progress, "refitting the friction with non-negative viscous coefficients", 0, 0);
+  refit_constrained(selected, current, at->first, at->second, physical.get(), train, heldout, whole_heldout, {}, d);
 }
 
 // The held-out mean square left, split (Diagnosis::unexplained_noise and the next two): `left` is
@@ -659,10 +697,10 @@ std::vector<std::string> physical_warnings(const Model& model, const Diagnosis& 
                          "mass matrix stays positive definite");
   }
   if (d.unexplained_fraction > d.unconstrained_unexplained_fraction + 0.02)
-    warnings.push_back(format("inertial_parameters: the linear fit was not physical; over physical links the causes "
-                              "leave %.1f %% of the held-out gap instead of its %.1f %%: part of what it explained "
-                              "needs a non-physical arm (check what it stood in for: friction, a payload, the torque "
-                              "sensors)",
+    warnings.push_back(format("the unconstrained fit was not physical; over physical links and with non-negative "
+                              "viscous friction the causes leave %.1f %% of the held-out gap instead of its %.1f %%: "
+                              "part of what it explained needs a non-physical arm or friction (check what it stood in "
+                              "for: friction, a payload, the torque sensors)",
                               100.0 * d.unexplained_fraction, 100.0 * d.unconstrained_unexplained_fraction));
   if (params.contains("joint_friction")) {
     const nlohmann::json& friction = params.at("joint_friction");
@@ -858,8 +896,10 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
   const Part& selection_heldout = d.transients.empty() ? heldout : steady_heldout;
   backward_check(selected, current, selection_train, selection_heldout, random_steady ? *random_steady : random,
                  options, d);
-  std::unique_ptr<Effect> physical_inertia;  // the causes' inertial fit over physical links, when needed
+  std::unique_ptr<Effect> physical_inertia, physical_friction;  // the causes' constrained fits, when needed
   refit_over_physical_links(model, selected, current, physical_inertia, selection_train, selection_heldout, heldout,
+                            options, d);
+  refit_friction_above_zero(model, selected, current, physical_friction, selection_train, selection_heldout, heldout,
                             options, d);
   // The verdict on the whole parts, transients included; its parameters' intervals from the part
   // they were fitted on (the steady samples when there are transients).
@@ -949,6 +989,7 @@ nlohmann::json to_json(const Diagnosis& d) {
                            {"side", u.side},
                            {"from_joint", u.from_joint},
                            {"times", u.times},
+                           {"times_in_heldout", u.times_in_heldout},
                            {"mode_joints", u.mode_joints},
                            {"mode_phase_deg", u.mode_phase_deg},
                            {"mode_coherence", u.mode_coherence},

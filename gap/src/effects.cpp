@@ -4,6 +4,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/dynamics/friction.hpp"
@@ -285,9 +286,13 @@ class Payload : public Effect {
 // --- joint_friction: per joint, phi1 (s(phi2 (dq + phi3)) - s(phi2 phi3)) + f_v dq ---------------
 // The Gaz et al. (2019) sigmoid (gaz_friction; s the logistic function) plus viscous friction; a
 // steep sigmoid with phi3 = 0 is Coulomb friction of phi1 / 2. Parameters per joint:
-// (phi1, ln phi2, phi3, f_v); ln phi2 keeps phi2 positive.
+// (phi1, ln phi2, phi3, v); ln phi2 keeps phi2 positive. v is f_v itself, or, with a viscous floor
+// (the physical refit: the model's own viscous friction plus f_v never below zero), the ln of f_v's
+// distance above the floor.
 class JointFriction : public Effect {
  public:
+  JointFriction() = default;
+  explicit JointFriction(const Vector7& viscous_floor) : viscous_floor_(viscous_floor) {}
   std::string name() const override { return "joint_friction"; }
   int size() const override { return 4 * kNumJoints; }
 
@@ -296,7 +301,7 @@ class JointFriction : public Effect {
     VectorXd tau(part.rows());
     for (int j = 0; j < kNumJoints; ++j) {
       const GazFriction sigmoid = law(theta, j);
-      const double viscous = theta[4 * j + 3];
+      const double viscous = viscous_of(theta, j);
       for (std::size_t k = 0; k < part.samples.size(); ++k) {
         const double dq = part.samples.dq[k][j];
         tau[rows_of(static_cast<int>(k)) + j] = sigmoid(dq) + viscous * dq;
@@ -310,6 +315,7 @@ class JointFriction : public Effect {
     for (int j = 0; j < kNumJoints; ++j) {
       const GazFriction sigmoid = law(theta, j);
       const double phi2 = std::exp(theta[4 * j + 1]);
+      const double viscous_slope = viscous_floor_ ? viscous_of(theta, j) - (*viscous_floor_)[j] : 1.0;  // d f_v / d v
       for (std::size_t k = 0; k < part.samples.size(); ++k) {
         const Eigen::Index r = rows_of(static_cast<int>(k)) + j;
         const double dq = part.samples.dq[k][j];
@@ -317,7 +323,7 @@ class JointFriction : public Effect {
         J(r, 4 * j) = gradient.phi1;
         J(r, 4 * j + 1) = phi2 * gradient.phi2;   // d/d(ln phi2) = phi2 d/dphi2
         J(r, 4 * j + 2) = gradient.phi3;
-        J(r, 4 * j + 3) = dq;
+        J(r, 4 * j + 3) = viscous_slope * dq;
       }
     }
     return J;
@@ -344,22 +350,32 @@ class JointFriction : public Effect {
           const double rss = (A * x - b).squaredNorm();
           if (rss < best) best = rss, theta.segment<4>(4 * j) << x[0], log_phi2, phi3, x[1];
         }
+      // Above the floor: a least-squares viscous coefficient below it starts just above it.
+      if (viscous_floor_) theta[4 * j + 3] = std::log(std::max(theta[4 * j + 3] - (*viscous_floor_)[j], 1e-4));
     }
     return theta;
   }
 
   nlohmann::json describe(const VectorXd& theta) const override {
     const VectorXd phi2 = theta(Eigen::seqN(1, kNumJoints, 4)).array().exp();
-    return {{"phi1_Nm", values(theta, 0, kNumJoints, 4)},
+    VectorXd viscous(kNumJoints);
+    for (int j = 0; j < kNumJoints; ++j) viscous[j] = viscous_of(theta, j);
+    nlohmann::json out = {{"phi1_Nm", values(theta, 0, kNumJoints, 4)},
             {"phi2_s_per_rad", values(phi2, 0, kNumJoints)},
             {"phi3_rad_per_s", values(theta, 2, kNumJoints, 4)},
-            {"viscous_Nms_per_rad", values(theta, 3, kNumJoints, 4)}};
+            {"viscous_Nms_per_rad", values(viscous, 0, kNumJoints)}};
+    if (viscous_floor_) out["fitted_with_non_negative_viscous"] = true;
+    return out;
   }
 
  private:
   static GazFriction law(const VectorXd& theta, int j) {
     return GazFriction(theta[4 * j], std::exp(theta[4 * j + 1]), theta[4 * j + 2]);
   }
+  double viscous_of(const VectorXd& theta, int j) const {
+    return viscous_floor_ ? (*viscous_floor_)[j] + std::exp(theta[4 * j + 3]) : theta[4 * j + 3];
+  }
+  std::optional<Vector7> viscous_floor_;
 };
 
 
@@ -673,6 +689,10 @@ std::vector<std::unique_ptr<Effect>> effect_library(const Model& model) {
   library.push_back(std::make_unique<LoadDependentFriction>());
   library.push_back(std::make_unique<ThermalDrift>());
   return library;
+}
+
+std::unique_ptr<Effect> joint_friction_above(const Vector7& viscous_floor) {
+  return std::make_unique<JointFriction>(viscous_floor);
 }
 
 std::unique_ptr<Effect> physical_inertial_parameters(const Model& model) {

@@ -79,6 +79,7 @@ struct UnexplainedStructure {
   int from_joint = 0;   // torque_of_joint, velocity_of_joint, position_of_joint: the joint driving it;
                         // reversal_event, position_event: the joint whose motion it follows
   std::vector<double> times;  // reversal_event, position_event: each burst [s], in its part's time
+  std::vector<bool> times_in_heldout;  // per burst: in the held-out part (else the training part)
   // A band shared with other joints (one mode): the joints whose residual is coherent with this one's
   // in its band, this one included (also those where it stays below what is reported alone), each
   // one's phase relative to this one's [deg] and coherence; empty when on this joint alone.
@@ -132,8 +133,9 @@ struct Diagnosis {
   Vector7 verdict_heldout_rms_after = Vector7::Zero();
   double unexplained_fraction = 1.0;       // held-out mean square left by the selected causes
   std::array<double, 2> unexplained_fraction_interval = {1.0, 1.0};  // its block-bootstrap interval
-  // What the causes left of the held-out part with their linear inertial fit, when no physical links
-  // realised it and the verdict is the refit over physical links (docs/gap.md); NaN otherwise.
+  // What the causes left of the held-out part with their unconstrained fit, when it was not physical (a
+  // linear inertial fit no physical links realise, a negative viscous friction) and the verdict is the
+  // constrained refit (docs/gap.md); NaN otherwise.
   double unconstrained_unexplained_fraction = std::numeric_limits<double>::quiet_NaN();
   nlohmann::json verdict_params;           // the causes' parameters fitted together, with their intervals
   Eigen::VectorXd verdict_heldout_torque;  // the causes' torque on the held-out part (stacked)

@@ -50,6 +50,11 @@ inline constexpr std::array<const char*, 13> kEffectNames = {
 // frame and the base parameters).
 std::vector<std::unique_ptr<Effect>> effect_library(const Model& model);
 
+// joint_friction with each joint's viscous coefficient kept above viscous_floor[j] (f_v = floor +
+// exp(v)): the diagnosis refits a verdict with floor = minus the model's own viscous friction when a
+// fitted one makes the total negative, which no passive joint has.
+std::unique_ptr<Effect> joint_friction_above(const Vector7& viscous_floor);
+
 // inertial_parameters fitted over physical links (the log-Cholesky parametrisation of each link's
 // 10 standard parameters; 70 parameters, nonlinear), or null when the model's own links are not
 // physical. The diagnosis refits a verdict with it when its linear inertial fit is not physical.

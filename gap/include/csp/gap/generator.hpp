@@ -86,8 +86,9 @@ ModelParameters truth_parameters(const Model& model, const InjectedEffects& trut
 
 // The injected effects that are physical joint torques beyond a rigid-body model with sliding and
 // static friction: position ripple, Dahl hysteresis, load-dependent friction, the added friction's
-// trend and the outside-library vibration, ringing, catch and base shake. Both generators use it: the dynamics core's adds it to the truth's inverse dynamics, the
-// emulated robot's plant takes it as its extra joint torque (csp::rt::PlantTorque). Allocation-free.
+// trend and the outside-library vibration, ringing, catch and base shake. Both generators use it: the
+// dynamics core's adds it to the truth's inverse dynamics, the emulated robot's plant takes it as its
+// extra joint torque (csp::rt::PlantTorque). Allocation-free.
 class InjectedJointTorque {
  public:
   // Dahl's friction as the library's friction_hysteresis effect has it (the part beyond the sliding
