@@ -489,7 +489,10 @@ TEST(GapDiagnosis, ViscousFrictionIsFittedNonNegative) {
   truth.friction.type = FrictionModel::Type::kLinear;
   truth.friction.coulomb = Vector7::Constant(2.0);
   truth.friction.viscous << 0.2, -0.4, 0.2, 0.2, -0.1, 0.2, 0.2;
-  const Diagnosis d = diagnose(model, generate_log(model, truth, 1, 2, {}), generate_log(model, truth, 3, 4, {}));
+  LogOptions options;
+  options.duration = 5.0;  // ample for friction, and cheap under the sanitizers
+  const Diagnosis d =
+      diagnose(model, generate_log(model, truth, 1, 2, options), generate_log(model, truth, 3, 4, options));
   std::cout << finding(d) << '\n';
   ASSERT_TRUE(std::find(d.causes.begin(), d.causes.end(), "joint_friction") != d.causes.end());
   const nlohmann::json& friction = d.verdict_params.at("joint_friction");
