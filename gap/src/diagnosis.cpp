@@ -377,19 +377,13 @@ std::array<JointGap, kNumJoints> where_it_lies(const Part& train, const Part& he
 std::vector<Transient> find_transients(const std::array<const Part*, 2>& parts,
                                        const std::array<const VectorXd*, 2>& left,
                                        std::array<std::vector<bool>, 2>& steady) {
-  std::array<std::vector<double>, 2> window_ms;
+  std::array<std::vector<double>, 2> window_ms;  // all joints' mean square per stretch
   std::vector<double> pooled;
   std::array<std::size_t, 2> width{};
   for (std::size_t p = 0; p < 2; ++p) {
-    const Samples& s = parts[p]->samples;
-    const double period = (s.t.back() - s.t.front()) / static_cast<double>(s.size() - 1);
-    width[p] = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(kTransientWindow / period)));
-    for (std::size_t start = 0; start + width[p] <= s.size(); start += width[p]) {
-      const auto rows = static_cast<Eigen::Index>(kNumJoints * width[p]);
-      window_ms[p].push_back(left[p]->segment(kNumJoints * static_cast<Eigen::Index>(start), rows).squaredNorm() /
-                             static_cast<double>(rows));
-      pooled.push_back(window_ms[p].back());
-    }
+    const Stretches stretches = stretch_mean_squares(parts[p]->samples, *left[p], kTransientWindow);
+    width[p] = stretches.width;
+    for (const Vector7& ms : stretches.mean_square) window_ms[p].push_back(ms.mean()), pooled.push_back(ms.mean());
   }
   std::vector<Transient> found;
   for (std::size_t p = 0; p < 2; ++p) steady[p].assign(parts[p]->samples.size(), true);

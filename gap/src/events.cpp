@@ -97,17 +97,11 @@ std::vector<MotionEvent> find_motion_events(const std::array<const Part*, 2>& pa
   std::array<std::vector<Vector7>, 2> stretch_ms;
   std::array<std::vector<double>, kNumJoints> pooled;
   for (std::size_t p = 0; p < 2; ++p) {
-    const Samples& s = parts[p]->samples;
-    if (s.size() < 2) return {};
-    const double period = (s.t.back() - s.t.front()) / static_cast<double>(s.size() - 1);
-    width[p] = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(kEventWindow / period)));
-    for (std::size_t start = 0; start + width[p] <= s.size(); start += width[p]) {
-      Vector7 ms = Vector7::Zero();
-      for (std::size_t k = start; k < start + width[p]; ++k)
-        ms += left[p]->segment<kNumJoints>(kNumJoints * static_cast<Eigen::Index>(k)).cwiseAbs2();
-      stretch_ms[p].push_back(ms / static_cast<double>(width[p]));
-      for (int j = 0; j < kNumJoints; ++j) pooled[j].push_back(stretch_ms[p].back()[j]);
-    }
+    if (parts[p]->samples.size() < 2) return {};
+    const Stretches stretches = stretch_mean_squares(parts[p]->samples, *left[p], kEventWindow);
+    width[p] = stretches.width, stretch_ms[p] = stretches.mean_square;
+    for (const Vector7& ms : stretch_ms[p])
+      for (int j = 0; j < kNumJoints; ++j) pooled[j].push_back(ms[j]);
   }
   std::vector<MotionEvent> events;
   for (int j = 0; j < kNumJoints; ++j) {

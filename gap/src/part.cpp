@@ -1,5 +1,8 @@
 #include "csp/gap/part.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "csp/dynamics/algorithms.hpp"
 
 namespace csp::gap {
@@ -57,6 +60,17 @@ Eigen::VectorXd stack(const std::vector<Vector7>& series) {
   Eigen::VectorXd out(kNumJoints * static_cast<Eigen::Index>(series.size()));
   for (std::size_t k = 0; k < series.size(); ++k)
     out.segment<kNumJoints>(kNumJoints * static_cast<Eigen::Index>(k)) = series[k];
+  return out;
+}
+
+Stretches stretch_mean_squares(const Samples& samples, const Eigen::VectorXd& left, double window) {
+  Stretches out;
+  const double period = (samples.t.back() - samples.t.front()) / static_cast<double>(samples.size() - 1);
+  out.width = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(window / period)));
+  for (std::size_t start = 0; start + out.width <= samples.size(); start += out.width)
+    out.mean_square.push_back(
+        joint_mean_square(left.segment(kNumJoints * static_cast<Eigen::Index>(start),
+                                       kNumJoints * static_cast<Eigen::Index>(out.width))));
   return out;
 }
 

@@ -33,4 +33,12 @@ Part subset(const Part& part, const std::vector<bool>& keep);
 Eigen::VectorXd stack(const std::vector<Vector7>& series);
 Vector7 joint_mean_square(const Eigen::VectorXd& stacked);
 
+// A part's residual `left` (stacked) cut into consecutive stretches of about `window` seconds (the
+// rest dropped): `width` samples each, and each stretch's mean square per joint.
+struct Stretches {
+  std::size_t width = 1;
+  std::vector<Vector7> mean_square;
+};
+Stretches stretch_mean_squares(const Samples& samples, const Eigen::VectorXd& left, double window);
+
 }  // namespace csp::gap
