@@ -67,7 +67,8 @@ int run_serve(const CanArguments& args) {
   std::fflush(stdout);
   const can::CanServeReport r = can::serve(scenario, options);
 
-  std::printf("  ran %llu cycles in %.3f s%s\n", static_cast<unsigned long long>(r.cycles), r.wall_seconds, interrupted ? ", interrupted" : "");
+  print_timing(r.timing, "round trip SYNC -> enabled RPDOs");
+  if (interrupted) std::printf("  interrupted\n");
   std::printf("  motions %llu, motion cycles %llu, lost commands %llu (longest run %d), reflexes %llu, error recoveries %llu\n",
               static_cast<unsigned long long>(r.arm.motions), static_cast<unsigned long long>(r.emulator.motion_cycles),
               static_cast<unsigned long long>(r.emulator.lost_commands), r.emulator.max_consecutive_lost,
@@ -86,16 +87,10 @@ int run_serve(const CanArguments& args) {
                 "received %llu, sent %llu, skipped %llu, send failures %llu\n",
                 i.name.c_str(), joints.c_str(), static_cast<unsigned long long>(i.load.frames()),
                 static_cast<unsigned long long>(i.load.bits()), args.bitrate, i.load_percent,
-                static_cast<double>(i.load.bits()) / r.wall_seconds,
+                static_cast<double>(i.load.bits()) / r.timing.wall_seconds,
                 static_cast<unsigned long long>(i.socket.received), static_cast<unsigned long long>(i.socket.sent),
                 static_cast<unsigned long long>(i.socket.skipped), static_cast<unsigned long long>(i.socket.send_failures));
   }
-  if (options.clock == rt::Clock::kRealtime) {
-    const rt::Percentiles& w = r.wakeup_latency_us;
-    std::printf("  wake-up latency after deadline: p50 %.1f  p99 %.1f  max %.1f us; overruns %llu, missed deadlines %llu\n", w.p50,
-                w.p99, w.max, static_cast<unsigned long long>(r.overruns), static_cast<unsigned long long>(r.missed_deadlines));
-  }
-  for (const std::string& warning : r.warnings) std::printf("  warning: %s\n", warning.c_str());
   if (!r.last_reflex.empty()) std::printf("  last reflex: %s\n", r.last_reflex.c_str());
   if (!args.log.empty()) std::printf("  log: %s (%llu events)\n", args.log.c_str(), static_cast<unsigned long long>(r.log_events));
   return 0;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 
 #include "csp/dynamics/arrays.hpp"
@@ -103,6 +104,31 @@ std::atomic<bool>& stop_on_signals() {
   std::signal(SIGINT, [](int) { stop_requested = true; });
   std::signal(SIGTERM, [](int) { stop_requested = true; });
   return stop_requested;
+}
+
+namespace {
+
+void print_percentiles(const std::string& name, const rt::Percentiles& p, const char* samples) {
+  if (p.count == 0) return;
+  std::printf("  %-34s p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f us (%zu %s)\n", name.c_str(), p.p50, p.p99, p.p999, p.max,
+              p.count, samples);
+}
+
+}  // namespace
+
+void print_timing(const rt::TimingReport& timing, const char* round_trip) {
+  std::printf("  %s clock: %llu cycles in %.3f s of wall time (%.0f cycles/s)\n", rt::clock_name(timing.clock),
+              static_cast<unsigned long long>(timing.cycles), timing.wall_seconds,
+              timing.wall_seconds > 0.0 ? static_cast<double>(timing.cycles) / timing.wall_seconds : 0.0);
+  print_percentiles(round_trip, timing.round_trip_us, "commands");
+  if (timing.clock == rt::Clock::kRealtime) {
+    std::printf("  real-time scheduling (SCHED_FIFO) %s, memory locked (mlockall) %s\n",
+                timing.realtime.scheduling ? "obtained" : "NOT obtained", timing.realtime.memory_locked ? "yes" : "NO");
+    print_percentiles("wake-up latency after deadline", timing.wakeup_latency_us, "cycles");
+    std::printf("  overruns %llu, missed deadlines %llu\n", static_cast<unsigned long long>(timing.overruns),
+                static_cast<unsigned long long>(timing.missed_deadlines));
+  }
+  for (const std::string& warning : timing.warnings) std::printf("  warning: %s\n", warning.c_str());
 }
 
 }  // namespace csp::cli

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "csp/io/robot_config.hpp"
+#include "csp/rt/cycle_driver.hpp"
 #include "csp/rt/scenario.hpp"
 
 namespace csp::cli {
@@ -51,5 +52,9 @@ struct ScenarioArguments {
 // The flag a run polls to end as its duration would: set by Ctrl-C (SIGINT) and SIGTERM from now
 // on, false until then. One flag for the process (a signal handler sees only globals).
 std::atomic<bool>& stop_on_signals();
+
+// The timing of a run, the same lines for every front end (rt::TimingReport); `round_trip` names
+// what the round trip measured ("controller compute time", "state -> command").
+void print_timing(const rt::TimingReport& timing, const char* round_trip);
 
 }  // namespace csp::cli

@@ -47,8 +47,8 @@ int run_serve(const ServeArguments& args) {
   const bridge::ServeReport r = bridge::serve(scenario, options);
 
   const bridge::ServerCounters& c = r.counters;
-  std::printf("  ran %llu cycles in %.3f s (%.0f cycles/s)%s\n", static_cast<unsigned long long>(r.cycles), r.wall_seconds,
-              static_cast<double>(r.cycles) / r.wall_seconds, interrupted ? ", interrupted" : "");
+  print_timing(r.timing, "round trip state -> command");
+  if (interrupted) std::printf("  interrupted\n");
   std::printf("  sessions %llu, motion cycles %llu, lost commands %llu (longest run %d), reflexes %llu\n",
               static_cast<unsigned long long>(c.sessions), static_cast<unsigned long long>(r.emulator.motion_cycles),
               static_cast<unsigned long long>(r.emulator.lost_commands), r.emulator.max_consecutive_lost,
@@ -59,17 +59,6 @@ int run_serve(const ServeArguments& args) {
               static_cast<unsigned long long>(c.rejected_oversized), static_cast<unsigned long long>(c.rejected_stale),
               static_cast<unsigned long long>(c.rejected_wrong_mode), static_cast<unsigned long long>(c.rejected_no_session),
               static_cast<unsigned long long>(c.non_finite_commands), static_cast<unsigned long long>(c.refused_requests));
-  if (r.round_trip_us.count > 0)
-    std::printf("  round trip state -> command: p50 %.1f  p99 %.1f  max %.1f us (%zu commands)\n", r.round_trip_us.p50,
-                r.round_trip_us.p99, r.round_trip_us.max, r.round_trip_us.count);
-  if (options.clock == rt::Clock::kRealtime) {
-    const rt::Percentiles& w = r.wakeup_latency_us;
-    std::printf("  wake-up latency after deadline: p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f us (%zu cycles)\n", w.p50, w.p99,
-                w.p999, w.max, w.count);
-    std::printf("  overruns %llu, missed deadlines %llu\n", static_cast<unsigned long long>(r.overruns),
-                static_cast<unsigned long long>(r.missed_deadlines));
-  }
-  for (const std::string& warning : r.warnings) std::printf("  warning: %s\n", warning.c_str());
   if (!r.last_reflex.empty()) std::printf("  last reflex: %s\n", r.last_reflex.c_str());
   if (!args.log.empty())
     std::printf("  log: %s (%llu events, %llu states)\n", args.log.c_str(), static_cast<unsigned long long>(r.log_events),

@@ -36,12 +36,12 @@ void run_session(const char* title, csp::rt::Clock clock, double seconds, int po
   const csp::bridge::ServeReport r = csp::bridge::serve(csp::rt::load_scenario(csp::rt::default_scenario_path()), options);
   const int exit_code = controller.wait(10s);
   std::printf("%s: %llu cycles in %.3f s; session %llu cycles in %.3f s = %.0f cycles/s; lost commands %llu; overruns %llu\n",
-              title, static_cast<unsigned long long>(r.cycles), r.wall_seconds,
+              title, static_cast<unsigned long long>(r.timing.cycles), r.timing.wall_seconds,
               static_cast<unsigned long long>(r.emulator.motion_cycles), r.motion_wall_seconds,
               static_cast<double>(r.emulator.motion_cycles) / r.motion_wall_seconds,
-              static_cast<unsigned long long>(r.emulator.lost_commands), static_cast<unsigned long long>(r.overruns));
-  std::printf("  round trip state -> command [us]: p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f (%zu)\n", r.round_trip_us.p50,
-              r.round_trip_us.p99, r.round_trip_us.p999, r.round_trip_us.max, r.round_trip_us.count);
+              static_cast<unsigned long long>(r.emulator.lost_commands), static_cast<unsigned long long>(r.timing.overruns));
+  std::printf("  round trip state -> command [us]: p50 %.1f  p99 %.1f  p99.9 %.1f  max %.1f (%zu)\n", r.timing.round_trip_us.p50,
+              r.timing.round_trip_us.p99, r.timing.round_trip_us.p999, r.timing.round_trip_us.max, r.timing.round_trip_us.count);
   std::printf("  CPU: server %.3f s, controller process %.3f s (exit code %d)\n", cpu_seconds(RUSAGE_SELF) - self_cpu,
               cpu_seconds(RUSAGE_CHILDREN) - children_cpu, exit_code);
 }

@@ -31,13 +31,16 @@ std::vector<status_t> statuses_in_log(const std::string& path) {
 }
 
 // csp serve (lockstep) + csp_lcm_joint_impedance in two processes for 2000+ cycles: no lost
-// command, the states of the in-process run, and a log that replays bit for bit.
+// command, the states of the in-process run, and a log that replays bit for bit. The controller
+// starts 2 s after the server: the round trip (rt::TimingReport) times a session's states only,
+// not the wait for a controller.
 TEST(BridgeNet, LockstepExternalControllerMatchesInProcessRun) {
   const std::string url = test::unique_lcm_url(0), log = test::temp_path("lockstep.lcmlog");
   const double motion = 2.0;
   test::Process server({CSP_EXECUTABLE, "serve", test::kDefaultScenario, "--clock", "lockstep", "--wait", "--duration", "2.1",
                         "--lockstep-timeout", "5", "--lcm-url", url, "--log", log},
                        test::temp_path("serve.out"));
+  std::this_thread::sleep_for(2s);
   test::Process controller({CSP_LCM_JOINT_IMPEDANCE, "--lcm-url", url, "--duration", "2", "--amplitude", "0.2", "--timeout", "30"},
                            test::temp_path("controller.out"));
   ASSERT_EQ(controller.wait(60s), 0) << controller.output();
@@ -50,6 +53,9 @@ TEST(BridgeNet, LockstepExternalControllerMatchesInProcessRun) {
   EXPECT_EQ(status.motion_cycles, 2001);
   EXPECT_EQ(status.lost_commands, 0);
   EXPECT_EQ(status.rejected_stale + status.rejected_fingerprint + status.rejected_truncated + status.rejected_oversized, 0);
+  EXPECT_GT(status.round_trip_max_us, 0.0);
+  EXPECT_LT(status.round_trip_max_us, 1e6 * std::chrono::duration<double>(2s).count())
+      << "the round trip counted the wait for the controller";
 
   // The same controller in-process from the same scenario, then the same idle cycles.
   const rt::Scenario scenario = rt::load_scenario(test::kDefaultScenario);

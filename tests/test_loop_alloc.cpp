@@ -84,7 +84,9 @@ Counted run_counted(const rt::Scenario& scenario, rt::Clock clock, const std::fu
     at_last = allocations.load();
   };
   const rt::MotionResult result = rt::run_motion(emulator, builtin.mode, builtin.controller, options);
-  if (clock == rt::Clock::kLockstep) EXPECT_FALSE(result.reflex) << result.reason;
+  if (clock == rt::Clock::kLockstep) {
+    EXPECT_FALSE(result.reflex) << result.reason;
+  }
   counted.after_warm_up = at_last - at_warm_up;
   counted.reflex = result.reflex;
   return counted;

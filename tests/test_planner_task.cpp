@@ -295,12 +295,27 @@ TEST(TaskPath, SameSeedSamePath) {
   options.seed = 7;
   const planners::TaskPath a = planners::plan_task_path(scene, model, options);
   const planners::TaskPath b = planners::plan_task_path(scene, model, options);
+  ASSERT_EQ(a.status, planners::PlannerStatus::kExactSolution) << a.message;
   ASSERT_EQ(a.log.q.size(), b.log.q.size());
   for (std::size_t k = 0; k < a.log.q.size(); ++k) ASSERT_EQ(a.log.q[k], b.log.q[k]) << k;
   ASSERT_EQ(a.waypoints.size(), b.waypoints.size());
 }
 
 // A scan line that leaves the skin: one error naming the scene and the point.
+// A budget too small for any path is the planner's status (OMPL's TIMEOUT), typed, with the scene
+// in its message: `csp plan` reports "no plan" (exit 1) without reading the message.
+TEST(TaskPath, NoPathWithinTheBudgetIsAStatus) {
+  const Scene scene = load_scene(scene_file("mis_rcm"));
+  const Model model = scene_model("panda", scene);
+  planners::TaskPathOptions options;
+  options.max_iterations = 1;
+  const planners::TaskPath path = planners::plan_task_path(scene, model, options);
+  EXPECT_EQ(path.status, planners::PlannerStatus::kNoSolution);
+  EXPECT_NE(path.message.find(scene.name), std::string::npos) << path.message;
+  EXPECT_NE(path.message.find("no path on the constraint manifold"), std::string::npos) << path.message;
+  EXPECT_TRUE(path.log.t.empty());
+}
+
 TEST(TaskConstraint, ScanOffTheSkinNamesTheSceneAndThePoint) {
   Scene scene = load_scene(scene_file("ultrasound_abdomen"));
   std::get<UltrasoundScan>(scene.task).end.z() += 0.01;

@@ -198,7 +198,7 @@ TEST(Transfer, EveryShippedTransferIsFreeAndWithinLimitsAt1kHz) {
           if (from.name == to.name) continue;
           SCOPED_TRACE(robot + " " + name + ": " + from.name + " -> " + to.name);
           const TransferPlan plan = planners::plan_transfer(scene, checker, model.parameters().joint_limits, from, to);
-          ASSERT_TRUE(plan.found) << plan.message;
+          ASSERT_TRUE(plan.found()) << plan.message;
           EXPECT_EQ(plan.waypoints.front(), from.q);
           EXPECT_EQ(plan.waypoints.back(), to.q);
           const planners::TimingLimits fractions;
@@ -305,7 +305,7 @@ TEST(Transfer, RandomBoxScenesNeverGetAnInvalidPlan) {
     options.seed = static_cast<std::uint64_t>(i + 1);
     const TransferPlan plan = planners::plan_transfer(r.scene, *checker, model.parameters().joint_limits,
                                                       {"start", r.start}, {"goal", r.goal}, options);
-    if (!plan.found) {
+    if (!plan.found()) {
       ++not_found;
       EXPECT_TRUE(plan.waypoints.empty());
       EXPECT_NE(plan.message.find("no path found within 2000 iterations"), std::string::npos) << plan.message;
@@ -356,7 +356,7 @@ std::string detour_plan_text(std::uint64_t seed) {
   options.seed = seed;
   const TransferPlan plan = planners::plan_transfer(p.r.scene, *p.checker, model.parameters().joint_limits,
                                                     {"start", p.r.start}, {"goal", p.r.goal}, options);
-  std::string text = plan.found ? "found\n" : "not found: " + plan.message + "\n";
+  std::string text = plan.found() ? "found\n" : "not found: " + plan.message + "\n";
   for (const auto& q : plan.waypoints) {
     for (int j = 0; j < kNumJoints; ++j) {
       char number[40];
@@ -460,7 +460,7 @@ TEST(Transfer, NothingFoundInTheBudgetSaysSoWithTheBestAttempt) {
   options.max_iterations = 2;
   const TransferPlan plan = planners::plan_transfer(p.r.scene, *p.checker, model.parameters().joint_limits,
                                                     {"start", p.r.start}, {"goal", p.r.goal}, options);
-  EXPECT_FALSE(plan.found);
+  EXPECT_FALSE(plan.found());
   EXPECT_TRUE(plan.waypoints.empty());
   EXPECT_TRUE(plan.cap_hit);
   EXPECT_EQ(plan.iterations, 2);

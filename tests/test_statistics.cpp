@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "csp/rt/cycle_driver.hpp"
 #include "csp/rt/deadline_clock.hpp"
 #include "csp/rt/statistics.hpp"
 
@@ -151,6 +152,61 @@ TEST(DeadlineClock, RealClockWakesAtOrAfterEachDeadline) {
   }
   EXPECT_EQ((clock.deadline_ns() - first) % kT, 0) << "deadlines stay on the grid";
   EXPECT_EQ(clock.wakeup_latency_us().count(), 20u);
+}
+
+// The cycle driver of every front end (rt::CycleDriver): the catch-up rule runs one robot cycle per
+// missed deadline, stops where the run ends, and one report counts cycles, lost commands, round
+// trips and the deadlines.
+TEST(CycleDriver, CatchesUpMissedDeadlinesAndReportsThem) {
+  fake_now = 0;
+  rt::CycleDriver driver(rt::Clock::kRealtime, rt::RealtimeConfig::kIgnore, fake_clock);
+  int robot_cycles = 0;
+  const auto robot_cycle = [&] {
+    ++robot_cycles;
+    driver.count_cycle(true);   // a caught-up cycle has no command
+  };
+  fake_now = kT + 2'000;   // the first deadline, 2 us late
+  EXPECT_TRUE(driver.deadline_reached());
+  driver.add_round_trip_ns(40'000);
+  driver.count_cycle(false);
+  fake_now = kT + 3 * kT + 500'000;   // the cycle's work passed three more deadlines
+  driver.catch_up(driver.end_cycle(), robot_cycle, [] { return true; });
+  EXPECT_EQ(robot_cycles, 3) << "one robot cycle per missed deadline";
+  fake_now = 5 * kT;   // the next deadline the grid kept
+  EXPECT_TRUE(driver.deadline_reached());
+  driver.count_cycle(false);
+  fake_now = 5 * kT + 2 * kT;   // two missed, but the run ends after one more cycle
+  driver.catch_up(driver.end_cycle(), robot_cycle, [&] { return driver.cycles() < 6; });
+  EXPECT_EQ(robot_cycles, 4) << "the catch-up stops where the run ends";
+
+  const rt::TimingReport report = driver.report();
+  EXPECT_EQ(report.clock, rt::Clock::kRealtime);
+  EXPECT_EQ(report.cycles, 6u);
+  EXPECT_EQ(report.lost_commands, 4u);
+  EXPECT_EQ(report.overruns, 2u);
+  EXPECT_EQ(report.missed_deadlines, 5u);
+  EXPECT_EQ(report.wakeup_latency_us.count, 2u);
+  EXPECT_EQ(report.wakeup_latency_us.max, 2.0);
+  EXPECT_EQ(report.round_trip_us.count, 1u);
+  EXPECT_NEAR(report.round_trip_us.max, 40.0, 40.0 / rt::DurationHistogram::kSubBuckets);
+  EXPECT_DOUBLE_EQ(report.wall_seconds, 7e-3);
+  // What real-time scheduling obtained is said either way: obtained, or a warning naming why not.
+  EXPECT_EQ(report.realtime.scheduling && report.realtime.memory_locked, report.realtime.problems.empty());
+  EXPECT_EQ(report.warnings.empty(), report.realtime.problems.empty());
+}
+
+TEST(CycleDriver, LockstepNeverMissesADeadline) {
+  rt::CycleDriver driver(rt::Clock::kLockstep);
+  EXPECT_TRUE(driver.deadline_reached());
+  EXPECT_EQ(driver.time_to_spin_ns(), 0);
+  driver.count_cycle(false);
+  EXPECT_EQ(driver.end_cycle(), 0);
+  const rt::TimingReport report = driver.report();
+  EXPECT_EQ(report.clock, rt::Clock::kLockstep);
+  EXPECT_EQ(report.cycles, 1u);
+  EXPECT_FALSE(report.realtime.scheduling) << "lockstep asks for no real-time scheduling";
+  EXPECT_TRUE(report.warnings.empty());
+  EXPECT_EQ(report.wakeup_latency_us.count, 0u);
 }
 
 }  // namespace

@@ -9,7 +9,7 @@
 
 #include "csp/bridge/lcm_log.hpp"
 #include "csp/bridge/lcm_url.hpp"
-#include "csp/rt/deadline_clock.hpp"
+#include "csp/rt/cycle_driver.hpp"
 
 namespace csp::bridge {
 namespace {
@@ -62,10 +62,12 @@ class Bus {
     const int64_t utime = now_utime();
     const std::vector<uint8_t> bytes = encode(server_->state_message(utime));
     // The round trip starts before the publication: a fast controller may answer while the
-    // state is still being logged.
+    // state is still being logged. It is timed for states published in a control session: not
+    // the wait for a controller to start one.
     if (!repeat) {
       published_ns_ = monotonic_ns();
-      round_trip_recorded_ = false;
+      answered_ns_.reset();
+      timed_ = server_->in_session();
     }
     lcm_.publish(channels_.state, bytes.data(), static_cast<unsigned>(bytes.size()));
     if (repeat) return;
@@ -90,17 +92,6 @@ class Bus {
     return done();
   }
 
-  // Real time: handles messages until the clock's deadline, blocking until its spin point and
-  // then polling without blocking, so that the deadline is met as closely as by clock.wait().
-  void receive_until(rt::DeadlineClock& clock) {
-    while (!clock.reached() && !stopped()) receive_for(clock.time_to_spin_ns());
-  }
-
-  bool stopped() const { return options_.stop && options_.stop->load(); }
-  uint64_t state_messages() const { return state_messages_; }
-  const rt::DurationHistogram& round_trip_us() const { return round_trip_us_; }
-
- private:
   // Handles the messages that arrive within `wait_ns` (0: only those already there).
   void receive_for(int64_t wait_ns) {
     pollfd fd{lcm_.getFileno(), POLLIN, 0};
@@ -108,14 +99,20 @@ class Bus {
     if (ppoll(&fd, 1, &timeout, nullptr) > 0) lcm_.handle();
   }
 
+  bool stopped() const { return options_.stop && options_.stop->load(); }
+  uint64_t state_messages() const { return state_messages_; }
+  // Publication of the state -> its command received, for a state of a control session.
+  std::optional<int64_t> round_trip_ns() const {
+    if (!timed_ || !answered_ns_) return std::nullopt;
+    return *answered_ns_ - published_ns_;
+  }
+
+ private:
   void on_message(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
     // Logged as received, before it is judged: replay judges it again the same way.
     if (log_) log_->write(channel, buffer->data, static_cast<int>(buffer->data_size), buffer->recv_utime);
     server_->receive(channel, buffer->data, static_cast<int>(buffer->data_size), buffer->recv_utime);
-    if (server_->answered() && !round_trip_recorded_) {
-      round_trip_us_.add(static_cast<double>(monotonic_ns() - published_ns_) * 1e-3);
-      round_trip_recorded_ = true;
-    }
+    if (server_->answered() && !answered_ns_) answered_ns_ = monotonic_ns();
   }
 
   const ServeOptions& options_;
@@ -126,22 +123,22 @@ class Bus {
   std::unique_ptr<RobotServer> server_;
   uint64_t state_messages_ = 0;
   int64_t published_ns_ = 0;
-  bool round_trip_recorded_ = false;
-  rt::DurationHistogram round_trip_us_;
+  bool timed_ = false;
+  std::optional<int64_t> answered_ns_;
 };
 
-status_t status_message(const RobotServer& server, const ServeReport& report, const rt::Percentiles& round_trip) {
+status_t status_message(const RobotServer& server, const rt::TimingReport& timing) {
   const ServerCounters& c = server.counters();
   const rt::EmulatorCounters& e = server.emulator().counters();
   status_t s;
   s.utime = now_utime();
-  s.cycles = static_cast<int64_t>(report.cycles);
+  s.cycles = static_cast<int64_t>(timing.cycles);
   s.sessions = static_cast<int64_t>(c.sessions);
   s.motion_cycles = static_cast<int64_t>(e.motion_cycles);
   s.lost_commands = static_cast<int64_t>(e.lost_commands);
   s.max_consecutive_lost = e.max_consecutive_lost;
   s.reflexes = static_cast<int64_t>(e.reflexes);
-  s.overruns = static_cast<int64_t>(report.overruns);
+  s.overruns = static_cast<int64_t>(timing.overruns);
   s.rejected_fingerprint = static_cast<int64_t>(c.rejected_fingerprint);
   s.rejected_truncated = static_cast<int64_t>(c.rejected_truncated);
   s.rejected_oversized = static_cast<int64_t>(c.rejected_oversized);
@@ -149,74 +146,68 @@ status_t status_message(const RobotServer& server, const ServeReport& report, co
   s.rejected_wrong_mode = static_cast<int64_t>(c.rejected_wrong_mode);
   s.rejected_no_session = static_cast<int64_t>(c.rejected_no_session);
   s.non_finite_commands = static_cast<int64_t>(c.non_finite_commands);
-  s.round_trip_p50_us = round_trip.p50;
-  s.round_trip_p99_us = round_trip.p99;
-  s.round_trip_max_us = round_trip.max;
+  s.round_trip_p50_us = timing.round_trip_us.p50;
+  s.round_trip_p99_us = timing.round_trip_us.p99;
+  s.round_trip_max_us = timing.round_trip_us.max;
   s.last_reflex = server.emulator().reflex_reason();
   return s;
 }
 
-// Status every kStatusEvery cycles, the scenario record every kScenarioEvery.
-void publish_periodic_status(Bus& bus, const ServeReport& report) {
-  if (report.cycles % kStatusEvery == 0)
-    bus.publish(bus.channels().status, encode(status_message(bus.server(), report, bus.round_trip_us().percentiles())));
-  if (report.cycles % kScenarioEvery == 0) bus.publish_scenario();
+// One robot cycle of a serve run: the server steps with the command that answered the state (or
+// none), the new state is published; the status every kStatusEvery cycles, the scenario record
+// every kScenarioEvery.
+void robot_cycle(Bus& bus, rt::CycleDriver& driver) {
+  RobotServer& server = bus.server();
+  const bool lost = server.in_session() && !server.answered();
+  if (const std::optional<int64_t> round_trip = bus.round_trip_ns()) driver.add_round_trip_ns(*round_trip);
+  server.step(now_utime());
+  driver.count_cycle(lost);
+  bus.publish_state(false);
+  const uint64_t cycles = driver.cycles();
+  if (cycles % kStatusEvery == 0) bus.publish(bus.channels().status, encode(status_message(server, driver.report())));
+  if (cycles % kScenarioEvery == 0) bus.publish_scenario();
 }
 
-// Real time on the DeadlineClock: at each deadline the robot steps with the command received
-// since the last state (the FCI's rule: in time only if before this deadline) and publishes the
-// new state. A cycle whose step and publication pass the next deadline misses it: the robot runs
-// the missed cycles at once, without a command, so that its time keeps pace with the clock's.
-void run_realtime(Bus& bus, uint64_t cycles, ServeReport& report) {
-  RobotServer& server = bus.server();
-  rt::DeadlineClock clock;
-  const auto robot_cycle = [&] {
-    server.step(now_utime());
-    ++report.cycles;
-    bus.publish_state(false);
-    report.overruns = clock.overruns();
-    report.missed_deadlines = clock.missed_deadlines();
-    publish_periodic_status(bus, report);
-  };
+// Real time: at each deadline the robot steps with the command received since the last state
+// (the FCI's rule: in time only if before this deadline) and publishes the new state; a cycle
+// whose step and publication pass the next deadline is caught up (rt::CycleDriver).
+void run_realtime(Bus& bus, rt::CycleDriver& driver, uint64_t cycles, ServeReport& report) {
+  const auto more = [&] { return driver.cycles() < cycles; };
   bus.publish_state(false);
-  while (report.cycles < cycles && !bus.stopped()) {
+  while (more() && !bus.stopped()) {
     const int64_t cycle_start = monotonic_ns();
-    bus.receive_until(clock);
-    const bool session_cycle = server.in_session();
-    robot_cycle();
-    for (int64_t missed = clock.end_cycle(); missed > 0 && report.cycles < cycles; --missed) robot_cycle();
+    // Messages until the deadline: blocking until the spin point, then polling without blocking,
+    // so that the deadline is met as closely as by a sleep and a spin.
+    while (!driver.deadline_reached() && !bus.stopped()) bus.receive_for(driver.time_to_spin_ns());
+    const bool session_cycle = bus.server().in_session();
+    robot_cycle(bus, driver);
+    driver.catch_up(driver.end_cycle(), [&] { robot_cycle(bus, driver); }, more);
     if (session_cycle) report.motion_wall_seconds += static_cast<double>(monotonic_ns() - cycle_start) * 1e-9;
   }
-  report.overruns = clock.overruns();
-  report.missed_deadlines = clock.missed_deadlines();
-  report.wakeup_latency_us = clock.wakeup_latency_us().percentiles();
 }
 
 // Lockstep: idle cycles pass at the wall-clock pace (a controller may start a session); a
 // session's cycle waits for its command up to the timeout.
-void run_lockstep(Bus& bus, uint64_t cycles, const ServeOptions& options, ServeReport& report) {
+void run_lockstep(Bus& bus, rt::CycleDriver& driver, uint64_t cycles, const ServeOptions& options, ServeReport& report) {
   RobotServer& server = bus.server();
   const auto timeout_ns = static_cast<int64_t>(options.lockstep_timeout * 1e9);
   const auto session_running = [&] { return server.in_session(); };
   int64_t deadline = monotonic_ns();
-  while (report.cycles < cycles && !bus.stopped()) {
+  bus.publish_state(false);
+  while (driver.cycles() < cycles && !bus.stopped()) {
     const int64_t cycle_start = monotonic_ns();
-    bus.publish_state(false);
     deadline += kCycleNs;
-    if (report.cycles == 0 && options.wait_for_controller) bus.pump_until(INT64_MAX, true, session_running);
+    if (driver.cycles() == 0 && options.wait_for_controller) bus.pump_until(INT64_MAX, true, session_running);
     else if (!server.in_session()) bus.pump_until(deadline, false, session_running);
     if (server.in_session()) bus.pump_until(monotonic_ns() + timeout_ns, true, [&] { return server.answered(); });
     const bool session_cycle = server.in_session();
-    server.step(now_utime());
-    ++report.cycles;
+    robot_cycle(bus, driver);
     const int64_t now = monotonic_ns();
     if (session_cycle) report.motion_wall_seconds += static_cast<double>(now - cycle_start) * 1e-9;
     // A session's cycles run as fast as the controller answers; idle cycles after it keep the
     // wall-clock pace from its end rather than from the schedule it ran ahead of.
     deadline = session_cycle ? now : std::max(deadline, now);
-    publish_periodic_status(bus, report);
   }
-  bus.publish_state(false);   // the state the last cycle produced
 }
 
 }  // namespace
@@ -228,21 +219,16 @@ ServeReport serve(const rt::Scenario& scenario, const ServeOptions& options) {
   Bus bus(scenario, options);
   RobotServer& server = bus.server();
   ServeReport report;
-  if (options.clock == rt::Clock::kRealtime) {
-    for (const std::string& missing : rt::enable_realtime_scheduling())
-      report.warnings.push_back("no real-time scheduling (" + missing + "): timing will suffer");
-  }
+  rt::CycleDriver driver(options.clock);
   const auto cycles = static_cast<uint64_t>(std::llround(options.duration / rt::kDeltaT));
-  const int64_t start_ns = monotonic_ns();
-  if (options.clock == rt::Clock::kRealtime) run_realtime(bus, cycles, report);
-  else run_lockstep(bus, cycles, options, report);
+  if (options.clock == rt::Clock::kRealtime) run_realtime(bus, driver, cycles, report);
+  else run_lockstep(bus, driver, cycles, options, report);
 
+  report.timing = driver.report();
   report.counters = server.counters();
   report.emulator = server.emulator().counters();
-  report.round_trip_us = bus.round_trip_us().percentiles();
-  report.wall_seconds = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
   report.last_reflex = server.emulator().reflex_reason();
-  bus.publish(bus.channels().status, encode(status_message(server, report, report.round_trip_us)));
+  bus.publish(bus.channels().status, encode(status_message(server, report.timing)));
   bus.publish_scenario();
   report.state_messages = bus.state_messages();
   if (bus.log()) {

@@ -46,14 +46,17 @@ void RobotServer::event(const std::string& text, int64_t utime) {
 }
 
 void RobotServer::receive(const std::string& channel, const void* data, int size, int64_t utime) {
-  if (channel == channels_.command) receive_command(data, size);
-  else if (channel == channels_.config) receive_request(data, size, utime);
+  if (channel == channels_.command) {
+    ReceivedCommand received;
+    if (accepted(decode_command(data, size, received), "message on " + channels_.command + ": ")) command(received);
+  } else if (channel == channels_.config) {
+    config_request_t decoded;
+    if (accepted(decode_exact(data, size, decoded), "message on " + channels_.config + ": ")) request(decoded, utime);
+  }
 }
 
-void RobotServer::receive_command(const void* data, int size) {
-  ReceivedCommand received;
+void RobotServer::command(const ReceivedCommand& received) {
   const std::string where = "message on " + channels_.command + ": ";
-  if (!accepted(decode_command(data, size, received), where)) return;
   if (!session_) return count(counters_.rejected_no_session, where + "command without a control session (send START_MOTION first)");
   if (received.mode != *session_)
     return count(counters_.rejected_wrong_mode, where + rt::control_mode_name(received.mode) +
@@ -66,10 +69,8 @@ void RobotServer::receive_command(const void* data, int size) {
   command_ = received.command;
 }
 
-void RobotServer::receive_request(const void* data, int size, int64_t utime) {
-  config_request_t request;
+void RobotServer::request(const config_request_t& request, int64_t utime) {
   const std::string where = "message on " + channels_.config + ": ";
-  if (!accepted(decode_exact(data, size, request), where)) return;
   config_reply_t reply;
   reply.request_id = request.request_id;
   reply.message_id = message_id();

@@ -544,7 +544,11 @@ TaskPath plan_task_path(const Scene& scene, const Model& model, const TaskPathOp
   const ompl_bridge::Result planned = ompl_bridge::plan_on_manifold(request, callbacks, constraint);
   path.iterations = static_cast<int>(planned.iterations);
   path.planning_seconds = planned.seconds;
-  if (!planned.solved) throw TaskError(where + ": no path on the constraint manifold: " + planned.message);
+  if (!planned.solved) {
+    path.message = where + ": no path on the constraint manifold: " + planned.message;
+    return path;
+  }
+  path.status = PlannerStatus::kExactSolution;
   for (const auto& q : planned.waypoints) path.waypoints.push_back(Vector7::Map(q.data()));
 
   // Dense states on the manifold, each valid and each chord certified free.

@@ -89,7 +89,7 @@ TransferPlan plan_transfer(const Scene& scene, ClearanceChecker& checker, const 
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("scene " + scene.name + ": transfer " + from.name + " -> " + to.name + ": " + e.what());
   }
-  plan.found = result.solved;
+  plan.status = result.solved ? PlannerStatus::kExactSolution : PlannerStatus::kNoSolution;
   plan.waypoints = to_vectors(result.waypoints);
   plan.best_attempt = to_vectors(result.best_attempt);
   plan.best_distance = result.best_distance;

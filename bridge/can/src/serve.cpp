@@ -6,8 +6,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "csp/rt/control_loop.hpp"
-#include "csp/rt/deadline_clock.hpp"
+#include "csp/rt/cycle_driver.hpp"
 
 namespace csp::can {
 namespace {
@@ -23,8 +22,9 @@ constexpr int64_t kIdleAfterNs = 100'000'000;
 // One serve run: the sockets, the drives, the robot, the bus-load counters.
 class CanSession {
  public:
-  CanSession(const rt::Scenario& scenario, const CanServeOptions& options)
+  CanSession(const rt::Scenario& scenario, const CanServeOptions& options, rt::CycleDriver& driver)
       : options_(options),
+        driver_(driver),
         arm_(scenario, options.log_path,
              [this](const std::string& line) {
                if (!options_.quiet) std::cerr << "csp can serve: " << line << '\n';
@@ -51,7 +51,6 @@ class CanSession {
     for (std::size_t i = 0; i < sockets_.size(); ++i) report_.interfaces[i].socket = sockets_[i]->counters();
   }
   uint64_t syncs_marked() const { return syncs_marked_; }
-  uint64_t cycles() const { return bus_.counters().syncs + bus_.counters().missing_syncs; }
   bool stopped() const { return options_.stop && options_.stop->load(); }
 
   // Handles the frames waiting on every interface. A SYNC runs the cycle once it has come on
@@ -66,6 +65,7 @@ class CanSession {
         else bus_.receive(*frame);
       }
     }
+    time_round_trip();
     flush();
   }
 
@@ -75,13 +75,12 @@ class CanSession {
     sync.id = kSync;
     mark_sync();
     for (std::size_t i = 0; i < sockets_.size(); ++i) send(i, sync);
-    bus_.receive(sync);
-    robot_time_cycle();
+    robot_cycle([&] { bus_.receive(sync); });
     flush();
   }
 
   void cycle_without_sync() {
-    bus_.cycle_without_sync();
+    robot_cycle([&] { bus_.cycle_without_sync(); });
     flush();
   }
 
@@ -107,30 +106,55 @@ class CanSession {
   // Sync clock with CSP's SYNC: every enabled joint's RPDO has come (or none is enabled and a
   // millisecond passed, or the enabled ones waited too long).
   bool sync_due(int64_t since_last_sync_ns) const {
-    int enabled = 0, received = 0;
-    for (int j = 0; j < kJoints; ++j) {
-      const JointCommand c = bus_.node(j).command();
-      enabled += c.operation_enabled ? 1 : 0;
-      received += c.operation_enabled && c.received ? 1 : 0;
-    }
-    if (enabled == 0) return since_last_sync_ns >= kIdleSyncNs;
-    return received == enabled || since_last_sync_ns >= kLockstepTimeoutNs;
+    const EnabledJoints joints = enabled_joints();
+    if (joints.enabled == 0) return since_last_sync_ns >= kIdleSyncNs;
+    return joints.received == joints.enabled || since_last_sync_ns >= kLockstepTimeoutNs;
   }
 
  private:
+  // The joints in operation enabled, and how many of them have this cycle's RPDO.
+  struct EnabledJoints {
+    int enabled = 0, received = 0;
+  };
+  EnabledJoints enabled_joints() const {
+    EnabledJoints joints;
+    for (int j = 0; j < kJoints; ++j) {
+      const JointCommand c = bus_.node(j).command();
+      joints.enabled += c.operation_enabled ? 1 : 0;
+      joints.received += c.operation_enabled && c.received ? 1 : 0;
+    }
+    return joints;
+  }
+
+  // One robot cycle (`run`: the bus's SYNC, or a cycle without one), counted by the driver: its
+  // command is lost unless every enabled joint's RPDO came. The state's TPDOs go out at the SYNC:
+  // the round trip of a session's cycle runs from here to the last enabled joint's RPDO.
+  template <typename Run>
+  void robot_cycle(const Run& run) {
+    const uint64_t lost_before = bus_.counters().lost_cycles;
+    run();
+    driver_.count_cycle(bus_.counters().lost_cycles != lost_before);
+    last_cycle_ns_ = monotonic_ns();
+    answered_ = false;
+    timed_ = arm_.server().in_session();
+    if (options_.clock == rt::Clock::kLockstep) bus_.elapse(1000);
+  }
+
+  void time_round_trip() {
+    if (!timed_ || answered_) return;
+    const EnabledJoints joints = enabled_joints();
+    if (joints.enabled == 0 || joints.received < joints.enabled) return;
+    answered_ = true;
+    driver_.add_round_trip_ns(monotonic_ns() - last_cycle_ns_);
+  }
+
   void on_sync(std::size_t interface, const Frame& sync) {
     sync_pending_[interface] = true;
     for (bool p : sync_pending_)
       if (!p) return;
     sync_pending_.assign(sync_pending_.size(), false);
     mark_sync();
-    bus_.receive(sync);
-    robot_time_cycle();
-  }
-
-  void robot_time_cycle() {
-    last_cycle_ns_ = monotonic_ns();
-    if (options_.clock == rt::Clock::kLockstep) bus_.elapse(1000);
+    robot_cycle([&] { bus_.receive(sync); });
   }
 
   // The bus load at 1 kHz counts the traffic between the first and the last SYNC.
@@ -154,6 +178,7 @@ class CanSession {
   }
 
   const CanServeOptions& options_;
+  rt::CycleDriver& driver_;
   ServerArm arm_;
   DriveBus bus_;
   std::vector<std::unique_ptr<SocketCan>> sockets_;
@@ -162,13 +187,15 @@ class CanSession {
   std::vector<bool> sync_pending_;
   int64_t last_elapse_ns_ = monotonic_ns();
   int64_t last_cycle_ns_ = 0;
+  bool timed_ = false;      // the cycle last run was one of a control session
+  bool answered_ = false;   // and every enabled joint's RPDO has come since
   CanServeReport report_;
   uint64_t syncs_marked_ = 0;
 };
 
-void run_sync(CanSession& s, uint64_t cycles, const CanServeOptions& options) {
+void run_sync(CanSession& s, const rt::CycleDriver& driver, uint64_t cycles, const CanServeOptions& options) {
   int64_t last_sync = monotonic_ns();
-  while (s.cycles() < cycles && !s.stopped()) {
+  while (driver.cycles() < cycles && !s.stopped()) {
     if (options.sync_producer) {
       s.wait(std::min<int64_t>(kIdleSyncNs, 10'000'000));
       s.receive();
@@ -185,26 +212,24 @@ void run_sync(CanSession& s, uint64_t cycles, const CanServeOptions& options) {
   }
 }
 
-void run_realtime(CanSession& s, uint64_t cycles, const CanServeOptions& options) {
-  rt::DeadlineClock clock;
-  while (s.cycles() < cycles && !s.stopped()) {
-    const uint64_t cycles_before = s.cycles();
-    while (!clock.reached() && !s.stopped()) {
-      s.wait(clock.time_to_spin_ns());
+// Real time: frames until the deadline; at it CSP's SYNC (sync_producer), or a cycle without a
+// command if the master's SYNC did not come; a late cycle is caught up (rt::CycleDriver).
+void run_realtime(CanSession& s, rt::CycleDriver& driver, uint64_t cycles, const CanServeOptions& options) {
+  const auto more = [&] { return driver.cycles() < cycles; };
+  while (more() && !s.stopped()) {
+    const uint64_t cycles_before = driver.cycles();
+    while (!driver.deadline_reached() && !s.stopped()) {
+      s.wait(driver.time_to_spin_ns());
       s.receive();
     }
     s.bus().elapse(static_cast<uint32_t>(rt::DeadlineClock::kPeriodNs / 1000));
-    // At the deadline: CSP's SYNC, or a cycle without a command if the master's SYNC did not come.
     const auto robot_cycle = [&] {
       if (options.sync_producer) s.produce_sync();
       else s.cycle_without_sync();
     };
-    if (options.sync_producer || s.cycles() == cycles_before) robot_cycle();
-    for (int64_t missed = clock.end_cycle(); missed > 0 && s.cycles() < cycles; --missed) robot_cycle();
+    if (options.sync_producer || driver.cycles() == cycles_before) robot_cycle();
+    driver.catch_up(driver.end_cycle(), robot_cycle, more);
   }
-  s.report().overruns = clock.overruns();
-  s.report().missed_deadlines = clock.missed_deadlines();
-  s.report().wakeup_latency_us = clock.wakeup_latency_us().percentiles();
 }
 
 }  // namespace
@@ -227,19 +252,15 @@ int interface_of_joint(int joint, int split) { return joint * split / kJoints; }
 CanServeReport serve(const rt::Scenario& scenario, const CanServeOptions& options) {
   if (!(options.duration > 0.0) || !std::isfinite(options.duration)) throw std::invalid_argument("duration: expected a positive number of seconds");
   if (!(options.bitrate >= 1e3 && options.bitrate <= 1e7)) throw std::invalid_argument("--bitrate: expected 1000 to 10000000 bit/s");
-  CanSession session(scenario, options);
+  rt::CycleDriver driver(options.clock);
+  CanSession session(scenario, options, driver);
   CanServeReport& report = session.report();
-  if (options.clock == rt::Clock::kRealtime)
-    for (const std::string& missing : rt::enable_realtime_scheduling())
-      report.warnings.push_back("no real-time scheduling (" + missing + "): timing will suffer");
   const auto cycles = static_cast<uint64_t>(std::llround(options.duration / rt::kDeltaT));
-  const int64_t start_ns = monotonic_ns();
-  if (options.clock == rt::Clock::kRealtime) run_realtime(session, cycles, options);
-  else run_sync(session, cycles, options);
-  report.wall_seconds = static_cast<double>(monotonic_ns() - start_ns) * 1e-9;
+  if (options.clock == rt::Clock::kRealtime) run_realtime(session, driver, cycles, options);
+  else run_sync(session, driver, cycles, options);
 
+  report.timing = driver.report();
   session.collect_socket_counters();
-  report.cycles = session.cycles();
   report.bus = session.bus().counters();
   report.arm = session.arm().counters();
   report.server = session.arm().server().counters();
@@ -250,7 +271,7 @@ CanServeReport serve(const rt::Scenario& scenario, const CanServeOptions& option
     const double seconds = static_cast<double>(session.syncs_marked() - 1) * rt::kDeltaT;
     i.load_percent = 100.0 * static_cast<double>(i.bits_at_last_sync - i.bits_at_first_sync) / (options.bitrate * seconds);
     if (i.load_percent > 100.0)
-      report.warnings.push_back(i.name + ": the traffic needs " + std::to_string(static_cast<int>(std::lround(i.load_percent))) +
+      report.timing.warnings.push_back(i.name + ": the traffic needs " + std::to_string(static_cast<int>(std::lround(i.load_percent))) +
                                 " % of a " + std::to_string(static_cast<int64_t>(options.bitrate)) +
                                 " bit/s bus at 1 kHz: it would not fit on a real bus (use --split)");
   }

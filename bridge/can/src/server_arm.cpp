@@ -49,23 +49,23 @@ ServerArm::ServerArm(const rt::Scenario& scenario, const std::string& log_path, 
   log_state();
 }
 
-void ServerArm::deliver(const std::string& channel, const std::vector<uint8_t>& bytes) {
-  const int64_t utime = bridge::now_utime();
-  if (log_) log_->write(channel, bytes, utime);
-  server_.receive(channel, bytes.data(), static_cast<int>(bytes.size()), utime);
-}
-
+// The server takes the request as it is; the log gets it encoded, as `csp serve` logs what it
+// receives, so that `csp replay` re-simulates a CAN session like an LCM one.
 void ServerArm::request(int8_t kind, rt::ControlMode mode) {
   config_request_t r{};
   r.utime = bridge::now_utime();
   r.request_id = ++request_id_;
   r.request = kind;
   r.control_mode = bridge::control_mode_code(mode);
-  deliver(channels_.config, bridge::encode(r));
+  if (log_) log_->write(channels_.config, bridge::encode(r), r.utime);
+  server_.request(r, r.utime);
 }
 
 void ServerArm::send_command(rt::ControlMode mode, const rt::Command& command) {
-  deliver(channels_.command, bridge::encode_command(mode, server_.message_id(), command, bridge::now_utime()));
+  const bridge::ReceivedCommand received{mode, server_.message_id(), command};
+  const int64_t utime = bridge::now_utime();
+  if (log_) log_->write(channels_.command, bridge::encode_command(mode, received.message_id, command, utime), utime);
+  server_.command(received);
   last_command_ = command;
 }
 

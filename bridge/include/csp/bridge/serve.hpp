@@ -7,6 +7,7 @@
 #include <string>
 
 #include "csp/bridge/server.hpp"
+#include "csp/rt/cycle_driver.hpp"
 #include "csp/rt/scenario.hpp"
 
 namespace csp::bridge {
@@ -24,18 +25,12 @@ struct ServeOptions {
 };
 
 struct ServeReport {
-  uint64_t cycles = 0;
+  rt::TimingReport timing;              // cycles, round trip publication -> command, deadlines
   ServerCounters counters;
   rt::EmulatorCounters emulator;
-  rt::Percentiles round_trip_us;        // state publication -> its command received
-  uint64_t overruns = 0;                // real time: cycles whose step and publication passed the next deadline
-  uint64_t missed_deadlines = 0;        // real time: deadlines those cycles skipped (rt::DeadlineClock's rule)
-  rt::Percentiles wakeup_latency_us;    // real time: robot step after its deadline
-  double wall_seconds = 0.0;
   double motion_wall_seconds = 0.0;     // of the cycles inside control sessions (lockstep: the controller's pace)
   uint64_t state_messages = 0;          // published (republications while waiting not counted)
   uint64_t log_events = 0;
-  std::vector<std::string> warnings;
   std::string last_reflex;
 };
 

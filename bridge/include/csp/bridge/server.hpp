@@ -4,6 +4,10 @@
 //
 // One cycle: state_message() is published -> receive() takes every message that arrives during
 // the cycle -> step() applies the command answering this state, or none (lost).
+//
+// The server takes typed inputs (command(), request()); receive() is the LCM edge that decodes
+// bytes into them. Front ends without bytes (the CAN bus) call the typed inputs directly and
+// encode only what they log.
 #pragma once
 
 #include <functional>
@@ -39,8 +43,13 @@ class RobotServer {
 
   int64_t message_id() const { return static_cast<int64_t>(emulator_.state().time.toMSec()); }
   robot_state_t state_message(int64_t utime) const;
-  // Handles one message received during the current cycle.
+  // Handles one message received during the current cycle: decodes it (a message that does not
+  // decode is counted and dropped) and passes it to command() or request().
   void receive(const std::string& channel, const void* data, int size, int64_t utime);
+  // A command answering the state `received.message_id` in the session's mode.
+  void command(const ReceivedCommand& received);
+  // A configuration request (START_MOTION, impedances, load, recovery, ...); the reply is sent.
+  void request(const config_request_t& request, int64_t utime);
   bool in_session() const { return session_.has_value(); }
   std::optional<rt::ControlMode> session() const { return session_; }
   bool answered() const { return command_.has_value(); }   // this cycle's command arrived
@@ -51,8 +60,6 @@ class RobotServer {
   const ServerCounters& counters() const { return counters_; }
 
  private:
-  void receive_command(const void* data, int size);
-  void receive_request(const void* data, int size, int64_t utime);
   void count(uint64_t& counter, const std::string& what);
   // Counts a message that failed decoding (`where` names its channel); true if it decoded.
   bool accepted(Rejection rejection, const std::string& where);

@@ -20,9 +20,10 @@
 
 #include "csp/dynamics/model.hpp"
 #include "csp/io/joint_log.hpp"
+#include "csp/io/scene.hpp"
 #include "csp/planners/checker.hpp"
 #include "csp/planners/ik.hpp"
-#include "csp/io/scene.hpp"
+#include "csp/planners/planner_status.hpp"
 
 namespace csp::planners {
 
@@ -123,6 +124,10 @@ struct TaskPathOptions {
 };
 
 struct TaskPath {
+  // kNoSolution: no path on the constraint manifold within max_iterations (`message` says so); the
+  // fields below the planner's are then empty.
+  PlannerStatus status = PlannerStatus::kNoSolution;
+  std::string message;
   std::string scene;
   int codim = 0;
   Vector7 start = Vector7::Zero(), end = Vector7::Zero();   // task start and end (IK)
@@ -150,7 +155,8 @@ TaskStates task_states(TaskConstraint& task, ClearanceChecker& contact_checker, 
 Vector7 task_anchor(TaskConstraint& task, const Vector7& q_task, ClearanceChecker& scene_checker);
 
 // The whole task path: states, planning on the manifold, densification, timing, 1 kHz log.
-// `model` carries the scene's tool (with_tool). Throws TaskError naming the scene and what failed.
+// `model` carries the scene's tool (with_tool). Throws TaskError naming the scene and what failed
+// when the task cannot be asked (unreachable, in collision); no path within the budget is a status.
 TaskPath plan_task_path(const Scene& scene, const Model& model, const TaskPathOptions& options = {});
 
 }  // namespace csp::planners

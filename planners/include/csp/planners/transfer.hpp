@@ -8,8 +8,9 @@
 #include <vector>
 
 #include "csp/dynamics/limits.hpp"
-#include "csp/planners/checker.hpp"
 #include "csp/io/scene.hpp"
+#include "csp/planners/checker.hpp"
+#include "csp/planners/planner_status.hpp"
 
 namespace csp::planners {
 
@@ -22,7 +23,8 @@ struct TransferOptions {
 };
 
 struct TransferPlan {
-  bool found = false;
+  PlannerStatus status = PlannerStatus::kNoSolution;
+  bool found() const { return status == PlannerStatus::kExactSolution; }
   std::vector<Vector7> waypoints;       // from ... to (rest at each), when found
   // When not found: the planner's best attempt (valid, certified, but short of the goal) and how far
   // its end is from the goal [rad] (-1: none); `message` says why.

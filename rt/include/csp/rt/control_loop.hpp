@@ -12,21 +12,10 @@
 #include <string_view>
 #include <vector>
 
-#include "csp/rt/deadline_clock.hpp"
+#include "csp/rt/cycle_driver.hpp"
 #include "csp/rt/emulator.hpp"
-#include "csp/rt/statistics.hpp"
 
 namespace csp::rt {
-
-enum class Clock { kLockstep, kRealtime };
-
-// libfranka RealtimeConfig: kEnforce fails without real-time scheduling, kIgnore warns and goes on.
-enum class RealtimeConfig { kEnforce, kIgnore };
-
-class RealtimeError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 // The network between controller and robot, seeded: each command is lost with
 // `loss_probability`, or arrives after a latency (mean + |normal jitter|) that may miss the
@@ -58,16 +47,6 @@ class CommandChannel {
   std::normal_distribution<double> normal_{0.0, 1.0};
 };
 
-struct TimingReport {
-  uint64_t cycles = 0;
-  uint64_t lost_commands = 0;         // not received in their cycle (faults, overruns)
-  uint64_t overruns = 0;              // real time: cycles whose controller call ended after the next deadline
-  uint64_t missed_deadlines = 0;      // real time: deadlines those cycles skipped (DeadlineClock's rule)
-  Percentiles controller_compute_us;  // wall time of the control callback
-  Percentiles wakeup_latency_us;      // real time: wake-up after the absolute deadline
-  std::vector<std::string> warnings;  // e.g. no real-time scheduling (kIgnore)
-};
-
 struct CycleInfo {
   bool command_sent = false;      // the controller produced a command this cycle
   bool command_received = false;  // and it reached the robot
@@ -92,7 +71,7 @@ struct MotionResult {
   bool reflex = false;          // the motion ended in a reflex (see errors and reason)
   ErrorSet errors;                // the errors that aborted it
   std::string reason;           // Emulator::reflex_reason()
-  TimingReport timing;
+  TimingReport timing;   // round_trip_us: the controller's compute time
 };
 
 // One motion as the FCI runs it, for every front end in this process: the robot publishes a state
@@ -133,9 +112,7 @@ class MotionSession {
   Emulator& emulator_;
   const LoopOptions& options_;
   CommandChannel channel_;
-  std::optional<DeadlineClock> clock_;   // real time only
-  TimingReport report_;
-  DurationHistogram compute_us_;
+  CycleDriver driver_;
   bool awaiting_answer_ = false;
   bool first_read_ = true;
   Duration last_read_time_;
@@ -147,8 +124,5 @@ class MotionSession {
 // the motion (MotionSession::fail), is reported to the observer, and is rethrown.
 MotionResult run_motion(Emulator& emulator, ControlMode mode, const Controller& controller,
                         const LoopOptions& options, std::optional<ControllerMode> controller_mode = std::nullopt);
-
-// SCHED_FIFO and mlockall for the calling thread; returns what could not be had (empty: all).
-std::vector<std::string> enable_realtime_scheduling();
 
 }  // namespace csp::rt

@@ -18,7 +18,7 @@
 #include "csp/can/drive_bus.hpp"
 #include "csp/can/server_arm.hpp"
 #include "csp/can/socketcan.hpp"
-#include "csp/rt/statistics.hpp"
+#include "csp/rt/cycle_driver.hpp"
 
 namespace csp::can {
 
@@ -46,18 +46,14 @@ struct InterfaceReport {
 };
 
 struct CanServeReport {
-  uint64_t cycles = 0;
+  rt::TimingReport timing;   // cycles, round trip SYNC -> the enabled joints' RPDOs, deadlines; warnings (bus load too)
   std::vector<InterfaceReport> interfaces;
   BusCounters bus;
   ServerArmCounters arm;
   bridge::ServerCounters server;
   rt::EmulatorCounters emulator;
   std::string last_reflex;
-  double wall_seconds = 0.0;
-  uint64_t overruns = 0, missed_deadlines = 0;   // realtime
-  rt::Percentiles wakeup_latency_us;             // realtime
   uint64_t log_events = 0;
-  std::vector<std::string> warnings;             // bus load over 100 %, no real-time scheduling
 };
 
 // The interface names of a split: "vcan0", 3 -> vcan0, vcan1, vcan2; which joint goes where.

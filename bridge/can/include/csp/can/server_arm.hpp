@@ -1,7 +1,8 @@
 // The Arm behind the CAN drives in `csp can serve`: bridge's transport-free RobotServer, the one
-// LCM feeds. Each SYNC becomes one server cycle with the messages an LCM controller would have
-// sent (START_MOTION, one command answering the state, AUTOMATIC_ERROR_RECOVERY), so that a CAN
-// session is logged in the LCM log format and `csp replay` re-simulates it bit for bit.
+// LCM feeds. Each SYNC becomes one server cycle with the inputs an LCM controller would have
+// sent (START_MOTION, one command answering the state, AUTOMATIC_ERROR_RECOVERY), passed typed;
+// the session log holds them encoded as LCM messages, so that `csp replay` re-simulates a CAN
+// session bit for bit.
 //
 // Franka's semantics on top of CiA 402 (docs/can.md, "The robot behind the drives"):
 // - all seven joints reaching operation enabled in one mode start a motion: CST (10) -> torque
@@ -49,7 +50,6 @@ class ServerArm : public Arm {
  private:
   void request(int8_t kind, rt::ControlMode mode);
   void send_command(rt::ControlMode mode, const rt::Command& command);
-  void deliver(const std::string& channel, const std::vector<uint8_t>& bytes);   // logged, then handled
   void log_state();
   void log_error(const std::string& text);   // an event record (CSP_EVENT) and a diagnostic line
   rt::Command command_values(rt::ControlMode mode, const ArmCommand& command);

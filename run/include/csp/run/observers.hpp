@@ -1,0 +1,108 @@
+// The observers of a run (run.hpp): logs, tracking, medical metrics, progress. Each sees the
+// states in order and keeps what it measures; a log observer throws when its file cannot be
+// written (the run then ends as its duration would).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "csp/bridge/lcm_log.hpp"
+#include "csp/dynamics/progress.hpp"
+#include "csp/rt/csv_log.hpp"
+#include "csp/rt/medical_metrics.hpp"
+#include "csp/run/run.hpp"
+
+namespace csp::run {
+
+// Motion time [s] of a state: robot time since the state the run started from.
+class MotionTime {
+ public:
+  explicit MotionTime(const rt::Emulator& emulator) : start_ms_(emulator.state().time.toMSec()) {}
+  double of(const rt::RobotState& state) const { return static_cast<double>(state.time.toMSec() - start_ms_) * 1e-3; }
+
+ private:
+  uint64_t start_ms_;
+};
+
+// The per-cycle CSV log (docs/joint-log.md), from the state the run starts from.
+class CsvLogObserver : public Observer {
+ public:
+  CsvLogObserver(const std::string& path, const rt::Emulator& emulator);
+  void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override { log_.write(state, cycle); }
+  const rt::CsvLog& log() const { return log_; }
+
+ private:
+  rt::CsvLog log_;
+};
+
+// The run as an LCM log (csp replay, csp log export, lcm-spy).
+class LcmLogObserver : public Observer {
+ public:
+  LcmLogObserver(const std::string& path, const Run& run)
+      : recorder_(path, run.scenario(), run.emulator(), run.controller().mode) {}
+  void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override { recorder_.record(state, cycle); }
+  uint64_t events() const { return recorder_.log().events(); }
+
+ private:
+  bridge::EmulateLogRecorder recorder_;
+};
+
+// The measured q against a reference q_ref(t) (t: motion time [s]), joint by joint; with the peaks
+// of the estimated external torque and of the sensed torque against its limit.
+class TrackingObserver : public Observer {
+ public:
+  using Reference = std::function<Vector7(double t)>;
+  TrackingObserver(Reference reference, const rt::Emulator& emulator);
+  void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override;
+
+  long cycles() const { return cycles_; }
+  double last_time() const { return last_time_; }   // motion time of the last state [s]
+  Vector7 rms_error() const;                          // [rad]
+  const Vector7& max_error() const { return max_error_; }
+  const Vector7& max_tau_ext() const { return max_tau_ext_; }             // |tau_ext_hat_filtered| [N m]
+  const Vector7& peak_tau_J_fraction() const { return peak_tau_J_fraction_; }   // |tau_J| / tau_max
+
+ private:
+  Reference reference_;
+  MotionTime time_;
+  Vector7 tau_max_;
+  Vector7 squared_error_ = Vector7::Zero(), max_error_ = Vector7::Zero(), max_tau_ext_ = Vector7::Zero();
+  Vector7 peak_tau_J_fraction_ = Vector7::Zero();
+  long cycles_ = 0;
+  double last_time_ = 0.0;
+};
+
+// The scenario's own trajectory from the pose the run starts in: what its built-in controller tracks.
+TrackingObserver::Reference scenario_reference(const rt::Scenario& scenario, const rt::Emulator& emulator);
+
+// A scene's task: the medical metrics (docs/medical.md).
+class MedicalObserver : public Observer {
+ public:
+  explicit MedicalObserver(const Run& run)
+      : recorder_(run.scenario(), run.emulator(), run.controller().status), time_(run.emulator()) {}
+  void on_cycle(const rt::RobotState& state, const rt::CycleInfo&) override { recorder_.add(state, time_.of(state)); }
+  const rt::MedicalRecorder& recorder() const { return recorder_; }
+
+ private:
+  rt::MedicalRecorder recorder_;
+  MotionTime time_;
+};
+
+// Progress of the run in simulated seconds, every 100 ms of robot time.
+class ProgressObserver : public Observer {
+ public:
+  ProgressObserver(Progress progress, std::string stage, double duration, const rt::Emulator& emulator)
+      : progress_(std::move(progress)), stage_(std::move(stage)), duration_(duration), time_(emulator) {}
+  void on_cycle(const rt::RobotState& state, const rt::CycleInfo&) override {
+    if (state.time.toMSec() % 100 == 0) report(progress_, stage_, time_.of(state), duration_);
+  }
+
+ private:
+  Progress progress_;
+  std::string stage_;
+  double duration_;
+  MotionTime time_;
+};
+
+}  // namespace csp::run
