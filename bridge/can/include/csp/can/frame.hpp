@@ -27,6 +27,8 @@ inline constexpr uint32_t kRpdo3 = 0x400, kRpdo4 = 0x500;   // (TPDO3/4, 0x380/0
 inline constexpr uint32_t kSdoTx = 0x580;   // server -> client
 inline constexpr uint32_t kSdoRx = 0x600;   // client -> server
 inline constexpr uint32_t kHeartbeat = 0x700;
+// Bit 31 of a COB-ID object (0x1014, PDO communication sub-index 1): the EMCY or PDO does not exist.
+inline constexpr uint32_t kCobIdInvalid = 0x80000000u;
 
 // A frame carrying `bytes` (at most 8).
 inline Frame make_frame(uint32_t id, std::initializer_list<uint8_t> bytes) {
