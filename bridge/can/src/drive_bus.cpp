@@ -8,7 +8,6 @@ namespace csp::can {
 DriveBus::DriveBus(const BusSettings& settings, Arm& arm) : arm_(arm) {
   joint_of_node_.fill(-1);
   out_.reserve(256);
-  nodes_.reserve(kJoints);
   for (int j = 0; j < kJoints; ++j) {
     const uint8_t id = settings.node_ids[j];
     if (id < 1 || id > 127) throw std::invalid_argument("CAN bus: node id of joint " + std::to_string(j + 1) + " must be 1..127");

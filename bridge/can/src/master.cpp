@@ -35,13 +35,7 @@ void Master::send(const Frame& frame) {
   if (!socket_.send(frame)) throw std::runtime_error("CAN interface " + socket_.interface() + ": cannot send " + to_string(frame));
 }
 
-void Master::send(uint32_t id, std::initializer_list<uint8_t> bytes) {
-  Frame f;
-  f.id = id;
-  f.dlc = static_cast<uint8_t>(bytes.size());
-  std::copy(bytes.begin(), bytes.end(), f.data.begin());
-  send(f);
-}
+void Master::send(uint32_t id, std::initializer_list<uint8_t> bytes) { send(make_frame(id, bytes)); }
 
 void Master::handle(const Frame& f) {
   const uint32_t function = f.id & 0x780, node = f.id & 0x7F;

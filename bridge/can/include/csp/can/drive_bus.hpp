@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <vector>
 
 #include "csp/can/drive_node.hpp"
@@ -86,7 +87,7 @@ class DriveBus {
  private:
   Arm& arm_;
   std::vector<Frame> out_;
-  std::vector<DriveNode> nodes_;
+  std::deque<DriveNode> nodes_;   // a deque: nodes are built in place and never move
   std::array<int, 128> joint_of_node_{};   // -1: no node of ours
   void run_arm();
 

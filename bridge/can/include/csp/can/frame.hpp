@@ -2,8 +2,10 @@
 // pre-defined connection set: COB-ID = function code + node id.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 
 namespace csp::can {
@@ -25,6 +27,17 @@ inline constexpr uint32_t kRpdo3 = 0x400, kRpdo4 = 0x500;   // (TPDO3/4, 0x380/0
 inline constexpr uint32_t kSdoTx = 0x580;   // server -> client
 inline constexpr uint32_t kSdoRx = 0x600;   // client -> server
 inline constexpr uint32_t kHeartbeat = 0x700;
+// Bit 31 of a COB-ID object (0x1014, PDO communication sub-index 1): the EMCY or PDO does not exist.
+inline constexpr uint32_t kCobIdInvalid = 0x80000000u;
+
+// A frame carrying `bytes` (at most 8).
+inline Frame make_frame(uint32_t id, std::initializer_list<uint8_t> bytes) {
+  Frame f;
+  f.id = id;
+  f.dlc = static_cast<uint8_t>(bytes.size());
+  std::copy(bytes.begin(), bytes.end(), f.data.begin());
+  return f;
+}
 
 // A frame is well formed when its identifier has 11 bits and its length is 0..8.
 bool is_valid(const Frame& frame);
