@@ -629,15 +629,13 @@ void Emulator::check_limits_and_collisions() {
   const PlantState& arm = plant_state_;
   const Estimator& e = estimator_;
   ErrorSet errors;
-  const Vector7 upper = limits.dq_upper(arm.q), lower = limits.dq_lower(arm.q);
-  double power = 0.0;
-  for (int i = 0; i < kNumJoints; ++i) {
-    if (arm.q[i] > limits.q_max[i] || arm.q[i] < limits.q_min[i]) errors.set(Error::joint_position_limits_violation);
-    if (arm.dq[i] > upper[i] || arm.dq[i] < lower[i]) errors.set(Error::joint_velocity_violation);
-    if (std::abs(e.tau_J_measured[i]) > limits.tau_max[i]) errors.set(Error::tau_j_range_violation);
-    power += std::max(0.0, arm.tau_J[i] * arm.dq[i]);
-  }
-  if (power > settings_.power_limit) errors.set(Error::power_limit_violation);
+  // The robot's own state, compared exactly: the sensed torque's range, the true torque's power.
+  const LimitViolations violated =
+      limit_violations(limits, arm.q, arm.dq, e.tau_J_measured, joint_power(arm.tau_J, arm.dq), 0.0);
+  if (violated.position.any()) errors.set(Error::joint_position_limits_violation);
+  if (violated.velocity.any()) errors.set(Error::joint_velocity_violation);
+  if (violated.torque.any()) errors.set(Error::tau_j_range_violation);
+  if (violated.power) errors.set(Error::power_limit_violation);
 
   // Contact and collision levels (setCollisionBehavior); collisions latch until recovery.
   const CollisionBehavior& c = settings_.collision;

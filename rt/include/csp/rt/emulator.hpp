@@ -28,7 +28,6 @@
 namespace csp::rt {
 
 inline constexpr double kDeltaT = 1e-3;   // FCI cycle [s] (libfranka kDeltaT)
-inline constexpr double kLimitTolerance = 1e-9;   // round-off allowance on every limit check
 
 // What a motion commands (libfranka's Robot::control overloads): joint-level torques, or one of
 // the four external motion generators.
@@ -119,7 +118,6 @@ struct EmulatorSettings {
   int substeps = 2;                      // plant integration steps per 1 ms cycle
   double torque_loop_bandwidth_hz = 300.0;   // first-order inner torque loop
   double tau_ext_cutoff_hz = 30.0;       // low-pass of tau_ext_hat_filtered
-  double power_limit = 80.0;             // sum of positive joint powers tau_J dq [W] (ISO 10218-1 5.10.5)
   bool gravity_compensation = true;      // always on for a real robot; off only to test the plant
   Vector7 tau_J_noise = Vector7::Zero(); // standard deviation of the torque-sensor noise [N m]
   Vector7 tau_J_bias = Vector7::Zero();  // torque-sensor offset [N m]
