@@ -272,6 +272,21 @@ class Emulator {
   CartesianImpedance cartesian_impedance_target(const Vector7& q_c, const Vector7& dq_c);
   Vector7 cartesian_impedance_torque(const CartesianImpedance& target, const Vector7& q_c, const Vector7& dq_c,
                                      const Vector7& joint_damping);
+  // The torque loop's setpoint law for one cycle: which of the robot's controllers acts, and its
+  // terms that stay fixed over the cycle's substeps.
+  struct TorqueLoopTarget {
+    bool impedance = false, cartesian = false, braking = false;
+    Vector7 mass_diagonal, damping;   // the robot's model's at the cycle's q; critical joint damping
+    Vector7 q, dq;                    // the held pose (Idle) or the motion generator's setpoint
+    CartesianImpedance cartesian_impedance;
+  };
+  // The parts of integrate(), in order.
+  void hold_on_brakes(double t, const LinkWrenches& f_ext);
+  TorqueLoopTarget torque_loop_target();
+  Vector7 torque_loop_setpoint(const TorqueLoopTarget& target);
+  void plant_substep(double t, double h, const LinkWrenches& f_ext);
+  bool stop_if_diverged(const Vector7& q_before, const LinkWrenches& f_ext);
+  void close_brakes_when_stopped(bool braking);
   void gravity_compensation_torque();
   LinkWrenches external_link_wrenches(double t);
   LinkWrenches with_contact_wrenches(const LinkWrenches& scripted) const;
