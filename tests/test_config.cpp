@@ -409,6 +409,74 @@ TEST(ConfigVelocityLimits, PandaLimitsAreConstant) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The per-sample limit check the emulator's reflexes and the planner's trajectory check share.
+
+TEST(LimitViolations, JointPowerCountsOnlyTheJointsThatDrive) {
+  const Vector7 tau = (Vector7() << 10.0, -20.0, 5.0, 0.0, 2.0, -1.0, 3.0).finished();
+  const Vector7 dq = (Vector7() << 1.0, 0.5, -2.0, 7.0, 0.25, -4.0, 1.0).finished();
+  // 10 + 0 (brakes) + 0 (brakes) + 0 + 0.5 + 4 + 3
+  EXPECT_EQ(joint_power(tau, dq), 17.5);
+}
+
+TEST(LimitViolations, EachLimitHoldsAtItsBoundAndIsViolatedBeyondItsTolerance) {
+  for (const std::string& robot : std::vector<std::string>{"panda", "fr3"}) {
+    const JointLimits limits = make_model(robot).parameters().joint_limits;
+    const Vector7 middle = 0.5 * (limits.q_min + limits.q_max);
+    const Vector7 rest = Vector7::Zero();
+    auto violated = [&](const Vector7& q, const Vector7& dq, const Vector7& tau, double power, double tolerance) {
+      return limit_violations(limits, q, dq, tau, power, tolerance);
+    };
+    for (int j = 0; j < kNumJoints; ++j) {
+      const Vector7 unit = Vector7::Unit(j);
+      for (const double tolerance : {0.0, kLimitTolerance}) {
+        const double beyond = tolerance + 1e-6;   // past the bound and its tolerance
+        SCOPED_TRACE(robot + " joint " + std::to_string(j + 1) + " tolerance " + std::to_string(tolerance));
+        // Position: at either bound, within tolerance; beyond it, only that joint.
+        for (const double bound : {limits.q_min[j], limits.q_max[j]}) {
+          Vector7 at = middle, past = middle;
+          at[j] = bound;
+          past[j] = bound > middle[j] ? bound + beyond : bound - beyond;
+          EXPECT_TRUE(violated(at, rest, rest, 0.0, tolerance).position.none());
+          EXPECT_EQ(violated(past, rest, rest, 0.0, tolerance).position, std::bitset<kNumJoints>().set(j));
+        }
+        // Velocity: against the bounds at that position (FR3: position-based).
+        const Vector7 upper = limits.dq_upper(middle), lower = limits.dq_lower(middle);
+        EXPECT_TRUE(violated(middle, upper[j] * unit, rest, 0.0, tolerance).velocity.none());
+        EXPECT_TRUE(violated(middle, lower[j] * unit, rest, 0.0, tolerance).velocity.none());
+        EXPECT_EQ(violated(middle, (upper[j] + beyond) * unit, rest, 0.0, tolerance).velocity,
+                  std::bitset<kNumJoints>().set(j));
+        EXPECT_EQ(violated(middle, (lower[j] - beyond) * unit, rest, 0.0, tolerance).velocity,
+                  std::bitset<kNumJoints>().set(j));
+        // Torque: |tau| against tau_max, either sign.
+        for (const double sign : {1.0, -1.0}) {
+          EXPECT_TRUE(violated(middle, rest, sign * limits.tau_max[j] * unit, 0.0, tolerance).torque.none());
+          EXPECT_EQ(violated(middle, rest, sign * (limits.tau_max[j] + beyond) * unit, 0.0, tolerance).torque,
+                    std::bitset<kNumJoints>().set(j));
+        }
+        // Power: the caller's number against power_max.
+        EXPECT_FALSE(violated(middle, rest, rest, limits.power_max, tolerance).power);
+        EXPECT_TRUE(violated(middle, rest, rest, limits.power_max + beyond, tolerance).power);
+      }
+    }
+    // Within the tolerance is no violation; the exact check (0) sees it.
+    Vector7 just_over = middle;
+    just_over[0] = limits.q_max[0] + 0.5 * kLimitTolerance;
+    EXPECT_TRUE(violated(just_over, rest, rest, 0.0, kLimitTolerance).position.none());
+    EXPECT_TRUE(violated(just_over, rest, rest, 0.0, 0.0).position.test(0));
+  }
+}
+
+// FR3's velocity bound shrinks to zero at the position limit: a joint there may only move back.
+TEST(LimitViolations, Fr3VelocityBoundIsThePositionsOne) {
+  const JointLimits limits = make_model("fr3").parameters().joint_limits;
+  ASSERT_TRUE(limits.position_based_velocity);
+  const Vector7 at_upper = limits.q_max, rest = Vector7::Zero();
+  const Vector7 outward = 1e-3 * Vector7::Unit(3), inward = -1e-3 * Vector7::Unit(3);
+  EXPECT_TRUE(limit_violations(limits, at_upper, outward, rest, 0.0, kLimitTolerance).velocity.test(3));
+  EXPECT_TRUE(limit_violations(limits, at_upper, inward, rest, 0.0, kLimitTolerance).velocity.none());
+}
+
+// ---------------------------------------------------------------------------------------------
 // Validation: each rule rejects a broken copy of panda.yaml with a message naming the file, the
 // key path and what was expected.
 
@@ -586,6 +654,16 @@ TEST(ConfigValidation, OtherLimitsMustBePositive) {
                   {"limits.joint.sets.franka_docs.ddq_max: expected 7 positive numbers"}, "negative_ddq_max.yaml");
   expect_rejected({{"rotation: {v_max: 2.5, a_max: 25.0,", "rotation: {v_max: 2.5, a_max: -25.0,"}},
                   {"limits.cartesian.rotation: expected positive v_max, a_max, j_max"}, "negative_a_max.yaml");
+}
+
+TEST(ConfigValidation, PowerLimitIsTheDefaultUnlessTheSetGivesAPositiveOne) {
+  EXPECT_EQ(make_model("panda").parameters().joint_limits.power_max, kDefaultPowerMax);
+  EXPECT_EQ(make_model("fr3").parameters().joint_limits.power_max, kDefaultPowerMax);
+  const std::string dtau = "dtau_max: [1000.0, 1000.0, 1000.0, 1000.0, 1000.0, 1000.0, 1000.0]";
+  const std::string path = write_temp(test_file_name(), edited_panda({{dtau, dtau + "\n        power_max: 65.0"}}));
+  EXPECT_EQ(model_parameters(load_robot_config(path), {}).joint_limits.power_max, 65.0);
+  expect_rejected({{dtau, dtau + "\n        power_max: 0.0"}},
+                  {"limits.joint.sets.franka_docs.power_max: expected a positive number"}, "zero_power_max.yaml");
 }
 
 TEST(ConfigValidation, MassMustBePositive) {

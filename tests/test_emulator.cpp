@@ -44,7 +44,7 @@ void remove_limits(rt::EmulatorSettings& settings) {
   limits.dq_max.setConstant(1e3);
   limits.tau_max.setConstant(1e6);
   limits.dtau_max.setConstant(1e9);
-  settings.power_limit = 1e9;
+  limits.power_max = 1e9;
   settings.collision.upper_torque_nominal.setConstant(1e6);
   settings.collision.upper_force_nominal.setConstant(1e6);
 }

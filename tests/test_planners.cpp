@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "csp/dynamics/collision_world.hpp"
 #include "csp/dynamics/geometry.hpp"
 #include "csp/io/yaml_field.hpp"
 #include "csp/planners/checker.hpp"
@@ -277,6 +278,82 @@ TEST(Geometry, ReachBoundsTheMotionOfEveryCapsulePoint) {
         for (const Vector3& offset : {Vector3(c.capsule.radius, 0, 0), Vector3(0, c.capsule.radius, 0), Vector3(0, 0, c.capsule.radius)})
           EXPECT_LE((after * (end + offset) - before * (end + offset)).norm(), bound + 1e-12) << c.name;
     }
+  }
+}
+
+// ---------------- The collision world (planner's clearance and emulator's contact) ----------------
+
+// The arm's capsules, then one tool capsule on the flange.
+std::vector<FrameCapsule> arm_and_probe() {
+  Tool tool;
+  tool.capsules.push_back({"probe", {Vector3(0.0, 0.0, 0.02), Vector3(0.0, 0.0, 0.1), 0.02}});
+  return arm_and_tool_capsules(tool);
+}
+
+TEST(CollisionWorld, PairsEveryCapsuleWithEveryObstacleButItsExemptOnesGroupedByCapsule) {
+  const std::vector<FrameCapsule> capsules = arm_and_probe();
+  const CollisionWorld world(capsules, {{"cart", Sphere{Vector3(0.5, 0.0, 0.0), 0.1}, {"link0", "probe"}},
+                                        {"floor", HalfSpace{}, {}}});
+  std::vector<std::array<int, 2>> expected;
+  for (int c = 0; c < static_cast<int>(capsules.size()); ++c) {
+    if (capsules[c].name != "link0" && capsules[c].name != "probe") expected.push_back({c, 0});
+    expected.push_back({c, 1});
+  }
+  ASSERT_EQ(world.pairs().size(), expected.size());
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    EXPECT_EQ(world.pairs()[k].capsule, expected[k][0]) << k;
+    EXPECT_EQ(world.pairs()[k].obstacle, expected[k][1]) << k;
+  }
+  // The sphere's box is its centre +- radius; the half-space has none.
+  ASSERT_TRUE(world.obstacle_box(0).has_value());
+  EXPECT_TRUE(near(world.obstacle_box(0)->min, Vector3(0.4, -0.1, -0.1), 1e-15));
+  EXPECT_TRUE(near(world.obstacle_box(0)->max, Vector3(0.6, 0.1, 0.1), 1e-15));
+  EXPECT_FALSE(world.obstacle_box(1).has_value());
+}
+
+TEST(CollisionWorld, PlacesCapsulesWhereTheHandComputedFramesPutThem) {
+  // q1 = pi/2, the rest 0: link 1's frame is the base frame turned a quarter about z and lifted by
+  // d1 = 0.333 m, so (x, y, z) lands at (-y, x, z + 0.333). The flange sits at a4 + a5 + a7 =
+  // 0.0825 - 0.0825 + 0.088 m along the base y axis (x at q = 0, turned with joint 1), at height
+  // d1 + d3 + d5 - d_flange = 0.333 + 0.316 + 0.384 - 0.107 = 0.926 m, its z axis pointing down.
+  const Model model = make_model("panda");
+  Data data;
+  Vector7 q = Vector7::Zero();
+  q[0] = std::numbers::pi / 2;
+  forward_kinematics(model, data, q);
+  const CollisionWorld world(arm_and_probe(), {});
+  std::vector<Capsule> placed_capsules;
+  std::vector<Aabb> boxes;
+  world.place(data, placed_capsules, boxes);
+  ASSERT_EQ(placed_capsules.size(), world.capsules().size());
+
+  const Capsule& link1_local = world.capsules()[1].local;
+  auto on_link1 = [](const Vector3& p) { return Vector3(-p.y(), p.x(), p.z() + 0.333); };
+  EXPECT_TRUE(near(placed_capsules[1].a, on_link1(link1_local.a), 1e-12));
+  EXPECT_TRUE(near(placed_capsules[1].b, on_link1(link1_local.b), 1e-12));
+  EXPECT_EQ(placed_capsules[1].radius, link1_local.radius);
+
+  const Capsule& probe = placed_capsules[kNumArmCapsules];
+  EXPECT_TRUE(near(probe.a, Vector3(0.0, 0.088, 0.906), 1e-12));
+  EXPECT_TRUE(near(probe.b, Vector3(0.0, 0.088, 0.826), 1e-12));
+  EXPECT_TRUE(near(boxes[kNumArmCapsules].min, Vector3(-0.02, 0.068, 0.806), 1e-12));
+  EXPECT_TRUE(near(boxes[kNumArmCapsules].max, Vector3(0.02, 0.108, 0.926), 1e-12));
+  // The one-capsule placement the contact engine uses is the same.
+  EXPECT_TRUE(near(world.placed_capsule(data, kNumArmCapsules).a, probe.a, 0.0));
+}
+
+TEST(CollisionWorld, SceneWorldHasTheScenesCapsulesObstaclesAndExemptions) {
+  for (const std::string& name : kScenes) {
+    const Scene scene = load_scene(scene_file(name));
+    const CollisionWorld world = collision_world(scene);
+    ASSERT_EQ(world.capsules().size(), kNumArmCapsules + scene.tool.capsules.size()) << name;
+    ASSERT_EQ(world.obstacles().size(), scene.obstacles.size()) << name;
+    std::size_t pairs = 0;
+    for (std::size_t o = 0; o < scene.obstacles.size(); ++o) {
+      EXPECT_EQ(world.obstacles()[o].name, scene.obstacles[o].name);
+      pairs += world.capsules().size() - scene.obstacles[o].exempt.size();   // load_scene: exempt names are capsules
+    }
+    EXPECT_EQ(world.pairs().size(), pairs) << name;
   }
 }
 

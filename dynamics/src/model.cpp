@@ -68,26 +68,6 @@ Model with_gravity(const Model& model, const Vector3& gravity) {
   return Model(p);
 }
 
-Vector7 JointLimits::dq_upper(const Vector7& q) const {
-  if (!position_based_velocity) return dq_max;
-  Vector7 upper;
-  for (int i = 0; i < kNumJoints; ++i) {
-    const double braking = std::sqrt(std::max(0.0, 2.0 * ddq_dec[i] * (q_max[i] - q[i])));
-    upper[i] = std::min(dq_max[i], std::max(0.0, -dq_offset[i] + braking));
-  }
-  return upper;
-}
-
-Vector7 JointLimits::dq_lower(const Vector7& q) const {
-  if (!position_based_velocity) return -dq_max;
-  Vector7 lower;
-  for (int i = 0; i < kNumJoints; ++i) {
-    const double braking = std::sqrt(std::max(0.0, 2.0 * ddq_dec[i] * (q[i] - q_min[i])));
-    lower[i] = std::max(-dq_max[i], std::min(0.0, dq_offset[i] - braking));
-  }
-  return lower;
-}
-
 bool is_physical_inertia(const Matrix3& I) {
   if (!I.isApprox(I.transpose(), 1e-12)) return false;
   const Vector3 moments = Eigen::SelfAdjointEigenSolver<Matrix3>(I, Eigen::EigenvaluesOnly).eigenvalues();

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <limits>
-#include <type_traits>
 
 #include "csp/dynamics/algorithms.hpp"
 
@@ -12,51 +11,36 @@ namespace {
 // The tool may touch links 6 and 7 (it is mounted on them); links 0-5 (capsules 0-6) it must not.
 constexpr int kToolCheckedArmCapsules = 7;
 
-Aabb shape_box(const Shape& shape) {
-  return std::visit(
-      [](const auto& s) -> Aabb {
-        if constexpr (std::is_same_v<std::decay_t<decltype(s)>, HalfSpace>) return {};
-        else return bounding_box(s);
-      },
-      shape);
-}
-
 }  // namespace
 
 ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene)
-    : model_(model), moving_(arm_and_tool_capsules(scene.tool)) {
+    : model_(model), world_(collision_world(scene)) {
   for (const auto& [name, required] : scene.clearance) classes_.push_back(name);
   auto class_index = [&](const std::string& name) {
     return static_cast<int>(std::find(classes_.begin(), classes_.end(), name) - classes_.begin());
   };
-  for (const auto& o : scene.obstacles)
-    statics_.push_back({o.name, o.obstacle_class, o.shape, shape_box(o.shape), std::holds_alternative<HalfSpace>(o.shape)});
+  const std::vector<FrameCapsule>& moving = world_.capsules();
 
   // Against a fixed obstacle, every joint up to the capsule's link moves it; against an arm capsule
   // on frame i, only joints after i change the distance (the pair moves rigidly with joints 1..i).
-  auto reach = [&](int moving, int fixed_up_to_joint) {
+  auto reach = [&](int capsule, int fixed_up_to_joint) {
     Vector7 r = Vector7::Zero();
     for (int j = fixed_up_to_joint + 1; j <= kNumJoints; ++j)
-      r[j - 1] = reach_from_joint(model_, j, moving_[moving].frame, moving_[moving].local);
+      r[j - 1] = reach_from_joint(model_, j, moving[capsule].frame, moving[capsule].local);
     return r;
   };
-  for (int m = 0; m < static_cast<int>(moving_.size()); ++m) {
-    for (int s = 0; s < static_cast<int>(statics_.size()); ++s) {
-      const auto& exempt = scene.obstacles[s].exempt;
-      if (std::find(exempt.begin(), exempt.end(), moving_[m].name) != exempt.end()) continue;
-      pairs_.push_back({m, s, false, class_index(statics_[s].obstacle_class), scene.clearance.at(statics_[s].obstacle_class), reach(m, 0)});
-    }
+  for (const auto& [m, o] : world_.pairs()) {
+    const std::string& obstacle_class = scene.obstacles[o].obstacle_class;
+    pairs_.push_back({m, o, false, class_index(obstacle_class), scene.clearance.at(obstacle_class), reach(m, 0)});
   }
   const double self = scene.clearance.at("self");
   auto add_self = [&](int distal, int proximal) {
-    pairs_.push_back({distal, proximal, true, class_index("self"), self, reach(distal, static_cast<int>(moving_[proximal].frame))});
+    pairs_.push_back({distal, proximal, true, class_index("self"), self, reach(distal, static_cast<int>(moving[proximal].frame))});
   };
   for (const auto& [a, b] : franka_arm_self_pairs()) add_self(b, a);
-  for (int m = kNumArmCapsules; m < static_cast<int>(moving_.size()); ++m)
+  for (int m = kNumArmCapsules; m < static_cast<int>(moving.size()); ++m)
     for (int a = 0; a < kToolCheckedArmCapsules; ++a) add_self(m, a);
 
-  placed_.resize(moving_.size());
-  placed_boxes_.resize(moving_.size());
   best_.resize(1);
   best_by_class_.resize(classes_.size());
   best_pair_.resize(classes_.size());
@@ -64,16 +48,13 @@ ClearanceChecker::ClearanceChecker(const Model& model, const Scene& scene)
 
 void ClearanceChecker::place(const Vector7& q) {
   forward_kinematics(model_, data_, q);
-  for (std::size_t i = 0; i < moving_.size(); ++i) {
-    placed_[i] = placed(moving_[i].local, capsule_frame_pose(data_, moving_[i].frame));
-    placed_boxes_[i] = bounding_box(placed_[i]);
-  }
+  world_.place(data_, placed_, placed_boxes_);
 }
 
 Distance ClearanceChecker::pair_distance(const Pair& pair) const {
   const Capsule& capsule = placed_[pair.moving];
   if (pair.self) return distance(capsule, placed_[pair.other]);
-  return std::visit([&](const auto& shape) { return distance(capsule, shape); }, statics_[pair.other].shape);
+  return distance(capsule, world_.obstacles()[pair.other].shape);
 }
 
 void ClearanceChecker::evaluate(const Vector7& joint_step, bool broad_phase, std::vector<StateClearance>& best) {
@@ -89,11 +70,10 @@ void ClearanceChecker::evaluate(const Vector7& joint_step, bool broad_phase, std
     StateClearance& tightest = best[slot];
     const double margin = pair.required + pair.reach.dot(joint_step);
     if (broad_phase) {
-      const bool half_space = !pair.self && statics_[pair.other].half_space;
-      if (!half_space) {
-        const Aabb& other = pair.self ? placed_boxes_[pair.other] : statics_[pair.other].box;
+      const std::optional<Aabb>& other = pair.self ? placed_boxes_[pair.other] : world_.obstacle_box(pair.other);
+      if (other) {   // none: a half-space, checked exactly
         // The gap bounds the distance only while positive: overlapping boxes say nothing about the depth.
-        const double gap = distance_lower_bound(placed_boxes_[pair.moving], other);
+        const double gap = distance_lower_bound(placed_boxes_[pair.moving], *other);
         if (gap > 0.0 && gap - margin >= tightest.clearance) continue;
       }
     }
@@ -109,8 +89,9 @@ void ClearanceChecker::evaluate(const Vector7& joint_step, bool broad_phase, std
   for (std::size_t i = 0; i < best.size(); ++i) {
     const Pair* p = best_pair[i];
     if (!p) continue;
-    best[i].moving = moving_[p->moving].name;
-    best[i].other = p->self ? std::string_view(moving_[p->other].name) : std::string_view(statics_[p->other].name);
+    const std::vector<FrameCapsule>& moving = world_.capsules();
+    best[i].moving = moving[p->moving].name;
+    best[i].other = p->self ? std::string_view(moving[p->other].name) : std::string_view(world_.obstacles()[p->other].name);
     best[i].obstacle_class = classes_[p->class_index];
   }
 }

@@ -14,8 +14,6 @@ namespace {
 // A step beyond this many times what the velocity limit allows in one sample is a discontinuity of
 // the file, not a motion (see check_trajectory).
 constexpr double kJumpFactor = 2.0;
-// Round-off allowance on every limit, as the emulator's (rt::kLimitTolerance).
-constexpr double kTolerance = 1e-9;
 
 // Records the first violation of each kind and joint (or class), so that a trajectory that is too
 // fast for a whole second reports one failure per joint, not a thousand.
@@ -54,7 +52,8 @@ std::string describe(const CheckFailure& f) {
 TrajectoryCheck check_trajectory(const JointLog& log, const Model& model, const Scene& scene,
                                  const CheckOptions& options) {
   check_joint_log(log);
-  const JointLimits& limits = model.parameters().joint_limits;
+  JointLimits limits = model.parameters().joint_limits;
+  limits.power_max = options.power_limit;
   const std::size_t n = log.size();
   TrajectoryCheck result;
   result.samples = n;
@@ -107,14 +106,17 @@ TrajectoryCheck check_trajectory(const JointLog& log, const Model& model, const 
     tau += friction_torque(model.parameters().friction, dq);
     const Vector7 dtau = k == 0 ? Vector7::Zero() : Vector7((tau - tau_previous) / dt);
 
+    // The robot's per-sample limits, as the emulator judges them (with the round-off allowance of
+    // a computed motion); the rates are the motion generator's, judged here alone.
+    const double power = joint_power(tau, dq);
+    const LimitViolations violated = limit_violations(limits, q, dq, tau, power, kLimitTolerance);
     const Vector7 upper = limits.dq_upper(q), lower = limits.dq_lower(q);
-    double power = 0.0;
     for (int j = 0; j < kNumJoints; ++j) {
       JointUsage& u = result.joints[j];
       const double middle = 0.5 * (limits.q_max[j] + limits.q_min[j]), half = 0.5 * (limits.q_max[j] - limits.q_min[j]);
       u.position = std::max(u.position, std::abs(q[j] - middle) / half);
       u.position_margin = std::min(u.position_margin, std::min(limits.q_max[j] - q[j], q[j] - limits.q_min[j]));
-      if (q[j] > limits.q_max[j] + kTolerance || q[j] < limits.q_min[j] - kTolerance)
+      if (violated.position[j])
         failures.add({"position", j + 1, t, row, q[j], q[j] > limits.q_max[j] ? limits.q_max[j] : limits.q_min[j],
                       format("%.6g, %.6g", limits.q_min[j], limits.q_max[j])},
                      std::to_string(j));
@@ -122,31 +124,33 @@ TrajectoryCheck check_trajectory(const JointLog& log, const Model& model, const 
       const double velocity_limit = dq[j] >= 0.0 ? upper[j] : -lower[j];
       const double v = fraction(dq[j], velocity_limit);
       if (v > u.velocity) u.velocity = v, u.t_velocity = t;
-      if (dq[j] > upper[j] + kTolerance || dq[j] < lower[j] - kTolerance)
-        failures.add({"velocity", j + 1, t, row, dq[j], velocity_limit, "rad/s"}, std::to_string(j));
+      if (violated.velocity[j]) failures.add({"velocity", j + 1, t, row, dq[j], velocity_limit, "rad/s"}, std::to_string(j));
 
-      auto usage = [&](const char* kind, double value, double limit, double& peak, double* t_peak, const char* unit) {
+      auto usage = [&](const char* kind, double value, double limit, bool exceeded, double& peak, double* t_peak,
+                       const char* unit) {
         const double f = fraction(value, limit);
         if (f > peak) {
           peak = f;
           if (t_peak) *t_peak = t;
         }
-        if (std::abs(value) > limit + kTolerance) failures.add({kind, j + 1, t, row, value, limit, unit}, std::to_string(j));
+        if (exceeded) failures.add({kind, j + 1, t, row, value, limit, unit}, std::to_string(j));
       };
-      usage("acceleration", ddq_difference[j], limits.ddq_max[j], u.acceleration, &u.t_acceleration, "rad/s^2");
-      usage("jerk", jerk[j], limits.dddq_max[j], u.jerk, &u.t_jerk, "rad/s^3");
-      usage("torque", tau[j], limits.tau_max[j], u.torque, &u.t_torque, "N m");
-      usage("torque_rate", dtau[j], limits.dtau_max[j], u.torque_rate, nullptr, "N m/s");
-      power += std::max(0.0, tau[j] * dq[j]);
+      auto beyond = [](double value, double limit) { return std::abs(value) > limit + kLimitTolerance; };
+      usage("acceleration", ddq_difference[j], limits.ddq_max[j], beyond(ddq_difference[j], limits.ddq_max[j]),
+            u.acceleration, &u.t_acceleration, "rad/s^2");
+      usage("jerk", jerk[j], limits.dddq_max[j], beyond(jerk[j], limits.dddq_max[j]), u.jerk, &u.t_jerk, "rad/s^3");
+      usage("torque", tau[j], limits.tau_max[j], violated.torque[j], u.torque, &u.t_torque, "N m");
+      usage("torque_rate", dtau[j], limits.dtau_max[j], beyond(dtau[j], limits.dtau_max[j]), u.torque_rate, nullptr,
+            "N m/s");
     }
     if (power > result.peak_power) result.peak_power = power, result.t_peak_power = t;
-    if (power > options.power_limit + kTolerance) failures.add({"power", 0, t, row, power, options.power_limit, "W"}, "");
+    if (violated.power) failures.add({"power", 0, t, row, power, limits.power_max, "W"}, "");
 
     forward_kinematics(model, data, q);
     zero_jacobian(data, Frame::kEndEffector, jacobian);
     const double speed = (jacobian.topRows<3>() * dq).norm();
     if (speed > result.peak_tool_speed) result.peak_tool_speed = speed, result.t_peak_tool_speed = t;
-    if (speed > result.tool_speed_limit + kTolerance)
+    if (speed > result.tool_speed_limit + kLimitTolerance)
       failures.add({"tool_speed", 0, t, row, speed, result.tool_speed_limit, "m/s"}, "");
     result.tool_position.push_back(frame_pose(data, Frame::kEndEffector).translation);
 

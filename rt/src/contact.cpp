@@ -6,7 +6,6 @@
 #include <span>
 #include <sstream>
 #include <stdexcept>
-#include <type_traits>
 #include <variant>
 
 #include "csp/rt/emulator.hpp"   // kDeltaT
@@ -35,16 +34,6 @@ Aabb grown(Aabb box, const Vector3& amplitude) {
   box.min -= amplitude.cwiseAbs();
   box.max += amplitude.cwiseAbs();
   return box;
-}
-
-// The obstacle's bounding box; half-spaces have none (always checked: one dot product).
-std::optional<Aabb> shape_box(const Shape& shape) {
-  return std::visit(
-      [](const auto& s) -> std::optional<Aabb> {
-        if constexpr (std::is_same_v<std::decay_t<decltype(s)>, HalfSpace>) return std::nullopt;
-        else return bounding_box(s);
-      },
-      shape);
 }
 
 Capsule shifted(Capsule c, const Vector3& by) {
@@ -76,17 +65,22 @@ double damping_potential(double elastic, double damping, double u) {
   return elastic * u - 0.5 * elastic * elastic / damping;
 }
 
+// The scene, checked before the collision world is built from it.
+std::shared_ptr<const Scene> required(std::shared_ptr<const Scene> scene) {
+  if (!scene) throw std::invalid_argument("contact: no scene");
+  return scene;
+}
+
 }  // namespace
 
 SceneContact::SceneContact(std::shared_ptr<const Scene> scene, const ContactOptions& options,
                            std::vector<TissueElement> tissue)
-    : scene_(std::move(scene)), options_(options), tissue_(std::move(tissue)) {
-  if (!scene_) throw std::invalid_argument("contact: no scene");
+    : scene_(required(std::move(scene))), options_(options), tissue_(std::move(tissue)), world_(collision_world(*scene_)) {
   if (!(std::isfinite(options_.friction_velocity) && options_.friction_velocity > 0.0))
     throw std::invalid_argument("contact: friction_velocity: expected a positive speed [m/s]");
   if (options_.max_substeps < 1) throw std::invalid_argument("contact: max_substeps: expected at least 1");
-  capsules_ = arm_and_tool_capsules(scene_->tool);
-  for (const Obstacle& o : scene_->obstacles) {
+  for (std::size_t i = 0; i < scene_->obstacles.size(); ++i) {
+    const Obstacle& o = scene_->obstacles[i];
     const Material* material = nullptr;
     if (!o.material.empty()) {
       const auto found = scene_->materials.find(o.material);
@@ -98,12 +92,13 @@ SceneContact::SceneContact(std::shared_ptr<const Scene> scene, const ContactOpti
       material = &found->second;
     }
     material_.push_back(material);
-    const std::optional<Aabb> box = shape_box(o.shape);
+    // Half-spaces have no box (always checked: one dot product).
+    const std::optional<Aabb>& box = world_.obstacle_box(static_cast<int>(i));
     obstacle_box_.push_back(box ? grown(*box, o.motion.amplitude) : Aabb{});
   }
   // The pairs a tissue element replaces: its obstacle against the tool's working end (after the
-  // arm's capsules in capsules_).
-  std::vector<Pair> replaced;
+  // arm's capsules in capsules()).
+  std::vector<CapsuleObstaclePair> replaced;
   const int tip = tool_tip_capsule(scene_->tool);
   for (const TissueElement& element : tissue_) {
     if (!element.law) throw std::invalid_argument("contact: a tissue element without a law");
@@ -113,15 +108,13 @@ SceneContact::SceneContact(std::shared_ptr<const Scene> scene, const ContactOpti
     if (tip < 0) throw std::invalid_argument(scene_->path + ": a tissue element needs a tool with capsules (its working end)");
     replaced.push_back({kNumArmCapsules + tip, obstacle});
   }
-  for (int c = 0; c < static_cast<int>(capsules_.size()); ++c) {
-    if (link_of(capsules_[c].frame) == 0) continue;   // the base capsule cannot move: nothing to push
-    for (int o = 0; o < static_cast<int>(scene_->obstacles.size()); ++o) {
-      const auto& exempt = scene_->obstacles[o].exempt;
-      const bool is_replaced = std::any_of(replaced.begin(), replaced.end(),
-                                           [&](const Pair& p) { return p.capsule == c && p.obstacle == o; });
-      if (material_[o] && !is_replaced && std::find(exempt.begin(), exempt.end(), capsules_[c].name) == exempt.end())
-        pairs_.push_back({c, o});
-    }
+  // The world's pairs (exempt capsules left out) that can push: an obstacle with a material, a
+  // capsule that moves (the base capsule cannot: nothing to push), not replaced by a tissue element.
+  for (const CapsuleObstaclePair& pair : world_.pairs()) {
+    const bool is_replaced = std::any_of(replaced.begin(), replaced.end(), [&](const CapsuleObstaclePair& r) {
+      return r.capsule == pair.capsule && r.obstacle == pair.obstacle;
+    });
+    if (link_of(capsules()[pair.capsule].frame) != 0 && material_[pair.obstacle] && !is_replaced) pairs_.push_back(pair);
   }
 }
 
@@ -141,7 +134,7 @@ void SceneContact::require_clear(const Model& plant, Data& data, const Vector7& 
   const ContactPoint& c = *std::max_element(state.contacts.begin(), state.contacts.begin() + state.active_contacts,
                                             [](const auto& a, const auto& b) { return a.penetration < b.penetration; });
   std::ostringstream what;
-  what << scene_->path << ": at the initial pose, capsule `" << capsules_[c.capsule].name << "` penetrates obstacle `"
+  what << scene_->path << ": at the initial pose, capsule `" << capsules()[c.capsule].name << "` penetrates obstacle `"
        << scene_->obstacles[c.obstacle].name << "` by " << c.penetration * 1e3
        << " mm: start the arm clear of the scene's obstacles";
   throw std::invalid_argument(what.str());
@@ -169,10 +162,9 @@ void SceneContact::evaluate_obstacles(const Model& plant, Data& data, double t, 
   int placed_index = -1;
   Capsule capsule;
   Aabb capsule_box;
-  for (const Pair& pair : pairs_) {
+  for (const CapsuleObstaclePair& pair : pairs_) {
     if (pair.capsule != placed_index) {   // pairs are grouped by capsule: place each once
-      const FrameCapsule& c = capsules_[pair.capsule];
-      capsule = placed(c.local, capsule_frame_pose(data, c.frame));
+      capsule = world_.placed_capsule(data, pair.capsule);
       capsule_box = bounding_box(capsule);
       placed_index = pair.capsule;
     }
@@ -184,14 +176,14 @@ void SceneContact::evaluate_obstacles(const Model& plant, Data& data, double t, 
     const bool moves = obstacle.motion.frequency_hz > 0.0;
     const Vector3 displacement = moves ? obstacle.motion.displacement(t) : Vector3::Zero();
     const Capsule relative = moves ? shifted(capsule, -displacement) : capsule;
-    const Distance d = std::visit([&](const auto& shape) { return distance(relative, shape); }, obstacle.shape);
+    const Distance d = distance(relative, obstacle.shape);
     if (d.distance > kLookAhead || std::abs(d.distance) < kMinPenetration) continue;
 
     const bool touching = d.distance < 0.0;
     ContactPoint& contact = touching ? state.contacts[state.active_contacts] : state.approaching[state.approaching_contacts];
     contact.capsule = pair.capsule;
     contact.obstacle = pair.obstacle;
-    contact.link = link_of(capsules_[pair.capsule].frame);
+    contact.link = link_of(capsules()[pair.capsule].frame);
     contact.penetration = -d.distance;
     contact.normal = (d.on_a - d.on_b) / d.distance;   // on_a - on_b = distance x normal (geometry.hpp)
     contact.point = 0.5 * (d.on_a + d.on_b) + displacement;

@@ -489,102 +489,137 @@ LinkWrenches Emulator::with_contact_wrenches(const LinkWrenches& scripted) const
 // bounded instead of drifting (tests/test_emulator.cpp measures it and a step response). Static
 // friction enters implicitly on the new velocity (tests/test_friction.cpp).
 void Emulator::integrate() {
-  PlantState& arm = plant_state_;
   TorqueLoop& loop = torque_loop_;
   const double cycle_start = state_.time.toSec() - kDeltaT;
   const LinkWrenches f_ext = external_link_wrenches(cycle_start);
   if (phase_ == Phase::kBraked) {
-    // Brakes closed: the links stand still and the sensors carry the static load.
-    arm.dq.setZero();
-    arm.ddq.setZero();
-    if (contact_) {
-      contact_->evaluate(plant_, plant_data_, cycle_start, arm.q, arm.dq, contact_state_);
-      contact_->add_dissipative_forces(plant_data_, arm.dq, contact_state_);
-    }
-    rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, contact_ ? with_contact_wrenches(f_ext) : f_ext, arm.tau_J);
+    hold_on_brakes(cycle_start, f_ext);
     return;
   }
   gravity_compensation_torque();
-  // The torque loop's setpoint: the user's torque (kExternalController), the robot's joint
-  // impedance (Idle, motion generators), its Cartesian impedance, or a reflex's braking.
-  const bool moving = phase_ == Phase::kMove;
-  const bool impedance = phase_ == Phase::kIdle || (moving && controller_ == ControllerMode::kJointImpedance);
-  const bool cartesian = moving && controller_ == ControllerMode::kCartesianImpedance;
-  const bool braking = phase_ == Phase::kBraking;
-  Vector7 mass_diagonal = Vector7::Zero();
-  CartesianImpedance target;
-  if (impedance || cartesian || braking) {
-    crba(internal_, internal_data_, arm.q);
-    mass_diagonal = internal_data_.mass_matrix.diagonal();
-  }
-  const Vector7& stiffness = settings_.joint_stiffness;
-  const Vector7 damping = 2.0 * (stiffness.cwiseProduct(mass_diagonal)).cwiseSqrt();   // critical
-  const Vector7 q_target = phase_ == Phase::kIdle ? loop.q_hold : motion_generator_.q_c;
-  const Vector7 dq_target = phase_ == Phase::kIdle ? Vector7::Zero() : motion_generator_.dq_c;
-  if (cartesian) target = cartesian_impedance_target(q_target, dq_target);   // uses the mass matrix at q
+  const TorqueLoopTarget target = torque_loop_target();
 
   // Stiff contact needs shorter steps (docs/contact.md); without one the configured substeps.
   const int substeps =
-      contact_ ? contact_->required_substeps(plant_, plant_data_, arm.q, contact_state_, settings_.substeps)
+      contact_ ? contact_->required_substeps(plant_, plant_data_, plant_state_.q, contact_state_, settings_.substeps)
                : settings_.substeps;
   contact_state_.substeps = substeps;
   const double h = kDeltaT / substeps;
-  const bool static_friction = (plant_.parameters().friction.breakaway.array() > 0.0).any();
   const double alpha = lowpass_factor(settings_.torque_loop_bandwidth_hz, h);
-  const Vector7 q_before = arm.q;
+  const Vector7 q_before = plant_state_.q;
   for (int s = 0; s < substeps; ++s) {
     // The robot's controllers run faster than the FCI: impedance and braking act every substep.
-    Vector7 setpoint = reception_.last_user_torque;
-    if (impedance) setpoint = stiffness.cwiseProduct(q_target - arm.q) + damping.cwiseProduct(dq_target - arm.dq);
-    if (cartesian) setpoint = cartesian_impedance_torque(target, q_target, dq_target, damping);
-    if (braking) setpoint = -mass_diagonal.cwiseProduct(arm.dq) / kBrakingTimeConstant;
-    loop.tau_motor += alpha * (setpoint + loop.gravity - loop.tau_motor);
-
-    // (M + armature) ddq = tau_motor - tau_friction(dq) - tau_extra - c - g + J^T f_ext
-    const FrictionModel& friction = plant_.parameters().friction;
-    Vector7 tau_link = loop.tau_motor - friction_torque(friction, arm.dq);
-    if (settings_.extra_joint_torque)
-      tau_link -= settings_.extra_joint_torque(cycle_start + s * h, arm.q, arm.dq, loop.tau_motor);
-    if (contact_) contact_->evaluate(plant_, plant_data_, cycle_start + s * h, arm.q, arm.dq, contact_state_);
-    forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, contact_ ? with_contact_wrenches(f_ext) : f_ext);
-    if (contact_ || static_friction) {
-      Vector7 dq_next = arm.dq + h * plant_data_.ddq;
-      // The contacts' damping and friction act on the new velocity (implicit, docs/contact.md): a
-      // friction slope mu F_n / v_s of thousands of N s/m needs no shorter step.
-      if (contact_) dq_next = contact_->dissipate(plant_data_, plant_data_.mass_matrix, arm.dq, dq_next, h, contact_state_);
-      // Static friction too: a joint at rest stays exactly at rest while the torque on it is below
-      // its breakaway level; its sliding level follows dq.
-      if (static_friction) {
-        Vector7 bound;
-        for (int i = 0; i < kNumJoints; ++i)
-          bound[i] = h * stribeck_level(friction.breakaway[i], friction.stribeck_velocity[i], arm.dq[i]);
-        dq_next = static_friction_velocity(plant_data_.mass_matrix, dq_next, bound);
-      }
-      arm.ddq = (dq_next - arm.dq) / h;
-      arm.dq = dq_next;
-    } else {
-      arm.ddq = plant_data_.ddq;
-      arm.dq += h * arm.ddq;
-    }
-    arm.q += h * arm.dq;
+    loop.tau_motor += alpha * (torque_loop_setpoint(target) + loop.gravity - loop.tau_motor);
+    plant_substep(cycle_start + s * h, h, f_ext);
   }
   // The sensor sits between rotor and link: the rotor's own inertia is not felt by it.
-  arm.tau_J = loop.tau_motor - plant_.armature().cwiseProduct(arm.ddq);
+  plant_state_.tau_J = loop.tau_motor - plant_.armature().cwiseProduct(plant_state_.ddq);
 
-  if (!arm.q.allFinite() || !arm.dq.allFinite() || !arm.tau_J.allFinite()) {
-    // The integration diverged (a setting the checks let through): a real robot never reports a
-    // NaN. Keep the last finite pose, stop the arm on its brakes, and say why; recoverable.
-    arm.q = q_before;
-    arm.dq.setZero();
-    arm.ddq.setZero();
-    gravity_compensation_torque();
-    loop.tau_motor = loop.gravity;
-    rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, f_ext, arm.tau_J);
-    enter_reflex(ErrorSet{}, "the emulated plant diverged (non-finite joint state); the arm was stopped at its last finite pose");
-    phase_ = Phase::kBraked;
-    return;
+  if (stop_if_diverged(q_before, f_ext)) return;
+  close_brakes_when_stopped(target.braking);
+}
+
+// Brakes closed: the links stand still and the sensors carry the static load (the scripted
+// wrenches and the scene's contact forces at rest).
+void Emulator::hold_on_brakes(double t, const LinkWrenches& f_ext) {
+  PlantState& arm = plant_state_;
+  arm.dq.setZero();
+  arm.ddq.setZero();
+  if (contact_) {
+    contact_->evaluate(plant_, plant_data_, t, arm.q, arm.dq, contact_state_);
+    contact_->add_dissipative_forces(plant_data_, arm.dq, contact_state_);
   }
+  rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, contact_ ? with_contact_wrenches(f_ext) : f_ext, arm.tau_J);
+}
 
+// The torque loop's setpoint: the user's torque (kExternalController), the robot's joint
+// impedance (Idle, motion generators), its Cartesian impedance, or a reflex's braking. Its parts
+// that depend on the cycle only (the targets, the mass matrix's diagonal) are computed once here.
+Emulator::TorqueLoopTarget Emulator::torque_loop_target() {
+  TorqueLoopTarget target;
+  const bool moving = phase_ == Phase::kMove;
+  target.impedance = phase_ == Phase::kIdle || (moving && controller_ == ControllerMode::kJointImpedance);
+  target.cartesian = moving && controller_ == ControllerMode::kCartesianImpedance;
+  target.braking = phase_ == Phase::kBraking;
+  target.mass_diagonal = Vector7::Zero();
+  if (target.impedance || target.cartesian || target.braking) {
+    crba(internal_, internal_data_, plant_state_.q);
+    target.mass_diagonal = internal_data_.mass_matrix.diagonal();
+  }
+  const Vector7& stiffness = settings_.joint_stiffness;
+  target.damping = 2.0 * (stiffness.cwiseProduct(target.mass_diagonal)).cwiseSqrt();   // critical
+  target.q = phase_ == Phase::kIdle ? torque_loop_.q_hold : motion_generator_.q_c;
+  target.dq = phase_ == Phase::kIdle ? Vector7::Zero() : motion_generator_.dq_c;
+  // Uses the mass matrix at q.
+  if (target.cartesian) target.cartesian_impedance = cartesian_impedance_target(target.q, target.dq);
+  return target;
+}
+
+// The setpoint at the arm's state of this substep.
+Vector7 Emulator::torque_loop_setpoint(const TorqueLoopTarget& target) {
+  const PlantState& arm = plant_state_;
+  Vector7 setpoint = reception_.last_user_torque;
+  if (target.impedance)
+    setpoint = settings_.joint_stiffness.cwiseProduct(target.q - arm.q) + target.damping.cwiseProduct(target.dq - arm.dq);
+  if (target.cartesian)
+    setpoint = cartesian_impedance_torque(target.cartesian_impedance, target.q, target.dq, target.damping);
+  if (target.braking) setpoint = -target.mass_diagonal.cwiseProduct(arm.dq) / kBrakingTimeConstant;
+  return setpoint;
+}
+
+// One semi-implicit Euler step of length h of the plant under the torque loop's motor torque, at
+// time t [s].
+void Emulator::plant_substep(double t, double h, const LinkWrenches& f_ext) {
+  PlantState& arm = plant_state_;
+  // (M + armature) ddq = tau_motor - tau_friction(dq) - tau_extra - c - g + J^T f_ext
+  const FrictionModel& friction = plant_.parameters().friction;
+  const bool static_friction = (friction.breakaway.array() > 0.0).any();
+  Vector7 tau_link = torque_loop_.tau_motor - friction_torque(friction, arm.dq);
+  if (settings_.extra_joint_torque) tau_link -= settings_.extra_joint_torque(t, arm.q, arm.dq, torque_loop_.tau_motor);
+  if (contact_) contact_->evaluate(plant_, plant_data_, t, arm.q, arm.dq, contact_state_);
+  forward_dynamics_cholesky(plant_, plant_data_, arm.q, arm.dq, tau_link, contact_ ? with_contact_wrenches(f_ext) : f_ext);
+  if (contact_ || static_friction) {
+    Vector7 dq_next = arm.dq + h * plant_data_.ddq;
+    // The contacts' damping and friction act on the new velocity (implicit, docs/contact.md): a
+    // friction slope mu F_n / v_s of thousands of N s/m needs no shorter step.
+    if (contact_) dq_next = contact_->dissipate(plant_data_, plant_data_.mass_matrix, arm.dq, dq_next, h, contact_state_);
+    // Static friction too: a joint at rest stays exactly at rest while the torque on it is below
+    // its breakaway level; its sliding level follows dq.
+    if (static_friction) {
+      Vector7 bound;
+      for (int i = 0; i < kNumJoints; ++i)
+        bound[i] = h * stribeck_level(friction.breakaway[i], friction.stribeck_velocity[i], arm.dq[i]);
+      dq_next = static_friction_velocity(plant_data_.mass_matrix, dq_next, bound);
+    }
+    arm.ddq = (dq_next - arm.dq) / h;
+    arm.dq = dq_next;
+  } else {
+    arm.ddq = plant_data_.ddq;
+    arm.dq += h * arm.ddq;
+  }
+  arm.q += h * arm.dq;
+}
+
+// The integration diverged (a setting the checks let through): a real robot never reports a
+// NaN. Keep the last finite pose, stop the arm on its brakes, and say why; recoverable.
+bool Emulator::stop_if_diverged(const Vector7& q_before, const LinkWrenches& f_ext) {
+  PlantState& arm = plant_state_;
+  if (arm.q.allFinite() && arm.dq.allFinite() && arm.tau_J.allFinite()) return false;
+  arm.q = q_before;
+  arm.dq.setZero();
+  arm.ddq.setZero();
+  gravity_compensation_torque();
+  torque_loop_.tau_motor = torque_loop_.gravity;
+  rnea(plant_, plant_data_, arm.q, arm.dq, arm.ddq, f_ext, arm.tau_J);
+  enter_reflex(ErrorSet{}, "the emulated plant diverged (non-finite joint state); the arm was stopped at its last finite pose");
+  phase_ = Phase::kBraked;
+  return true;
+}
+
+// A reflex's braking ends with the brakes closed once the arm has (nearly) stopped, or after the
+// longest braking time whatever its speed.
+void Emulator::close_brakes_when_stopped(bool braking) {
+  PlantState& arm = plant_state_;
   if (braking && ((arm.dq.array().abs() < kBrakesClosedVelocity).all() ||
                   state_.time.toSec() - braking_since_ >= kMaxBrakingTime - 1e-9)) {
     phase_ = Phase::kBraked;
@@ -629,15 +664,13 @@ void Emulator::check_limits_and_collisions() {
   const PlantState& arm = plant_state_;
   const Estimator& e = estimator_;
   ErrorSet errors;
-  const Vector7 upper = limits.dq_upper(arm.q), lower = limits.dq_lower(arm.q);
-  double power = 0.0;
-  for (int i = 0; i < kNumJoints; ++i) {
-    if (arm.q[i] > limits.q_max[i] || arm.q[i] < limits.q_min[i]) errors.set(Error::joint_position_limits_violation);
-    if (arm.dq[i] > upper[i] || arm.dq[i] < lower[i]) errors.set(Error::joint_velocity_violation);
-    if (std::abs(e.tau_J_measured[i]) > limits.tau_max[i]) errors.set(Error::tau_j_range_violation);
-    power += std::max(0.0, arm.tau_J[i] * arm.dq[i]);
-  }
-  if (power > settings_.power_limit) errors.set(Error::power_limit_violation);
+  // The robot's own state, compared exactly: the sensed torque's range, the true torque's power.
+  const LimitViolations violated =
+      limit_violations(limits, arm.q, arm.dq, e.tau_J_measured, joint_power(arm.tau_J, arm.dq), 0.0);
+  if (violated.position.any()) errors.set(Error::joint_position_limits_violation);
+  if (violated.velocity.any()) errors.set(Error::joint_velocity_violation);
+  if (violated.torque.any()) errors.set(Error::tau_j_range_violation);
+  if (violated.power) errors.set(Error::power_limit_violation);
 
   // Contact and collision levels (setCollisionBehavior); collisions latch until recovery.
   const CollisionBehavior& c = settings_.collision;

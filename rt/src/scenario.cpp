@@ -252,7 +252,7 @@ void read_robot_settings(const Field& f, EmulatorSettings& s) {
   }
   if (f.has("torque_loop_bandwidth_hz")) s.torque_loop_bandwidth_hz = positive(f["torque_loop_bandwidth_hz"]);
   if (f.has("tau_ext_cutoff_hz")) s.tau_ext_cutoff_hz = positive(f["tau_ext_cutoff_hz"]);
-  if (f.has("power_limit")) s.power_limit = positive(f["power_limit"]);
+  if (f.has("power_limit")) s.plant.joint_limits.power_max = positive(f["power_limit"]);
   if (f.has("gravity_compensation")) s.gravity_compensation = f["gravity_compensation"].boolean();
   if (f.has("tau_J_noise")) s.tau_J_noise = non_negative7(f["tau_J_noise"]);
   if (f.has("tau_J_bias")) s.tau_J_bias = f["tau_J_bias"].vector<7>();

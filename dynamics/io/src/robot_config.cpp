@@ -75,7 +75,7 @@ Vector7 positive7(const Field& field) {
 }
 
 JointLimits joint_limit_set(const Field& f) {
-  f.allow_only({"source", "q_min", "q_max", "dq_max", "ddq_max", "dddq_max", "tau_max", "dtau_max",
+  f.allow_only({"source", "q_min", "q_max", "dq_max", "ddq_max", "dddq_max", "tau_max", "dtau_max", "power_max",
                 "position_based_velocity"});
   JointLimits limits;
   limits.q_min = f["q_min"].vector<7>();
@@ -88,6 +88,7 @@ JointLimits joint_limit_set(const Field& f) {
   limits.dddq_max = positive7(f["dddq_max"]);
   limits.tau_max = positive7(f["tau_max"]);
   limits.dtau_max = positive7(f["dtau_max"]);
+  if (f.has("power_max")) limits.power_max = positive(f["power_max"]);   // else JointLimits' (ISO 10218-1)
   if (f.has("position_based_velocity")) {
     const Field p = f["position_based_velocity"];
     p.allow_only({"dq_offset", "ddq_dec"});

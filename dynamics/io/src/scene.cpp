@@ -245,6 +245,12 @@ std::vector<FrameCapsule> arm_and_tool_capsules(const Tool& tool) {
   return capsules;
 }
 
+CollisionWorld collision_world(const Scene& scene) {
+  std::vector<CollisionObstacle> obstacles;
+  for (const Obstacle& o : scene.obstacles) obstacles.push_back({o.name, o.shape, o.exempt});
+  return CollisionWorld(arm_and_tool_capsules(scene.tool), std::move(obstacles));
+}
+
 int tool_tip_capsule(const Tool& tool) {
   const Vector3& tcp = tool.F_T_EE.translation;
   int tip = -1;

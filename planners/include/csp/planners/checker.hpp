@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "csp/dynamics/geometry.hpp"
+#include "csp/dynamics/collision_world.hpp"
 #include "csp/io/scene.hpp"
 
 namespace csp::planners {
@@ -58,16 +58,9 @@ class ClearanceChecker {
   int num_pairs() const { return static_cast<int>(pairs_.size()); }
 
  private:
-  struct Static {
-    std::string name;
-    std::string obstacle_class;
-    Shape shape;
-    Aabb box;          // unused for half-spaces
-    bool half_space;
-  };
   struct Pair {
     int moving;
-    int other;         // index into statics_, or into moving_ when self
+    int other;         // an obstacle of world_, or (self) another of its capsules
     bool self;
     int class_index;   // into classes_
     double required;   // clearance of the class
@@ -83,8 +76,7 @@ class ClearanceChecker {
 
   Model model_;
   Data data_;
-  std::vector<FrameCapsule> moving_;   // arm_and_tool_capsules
-  std::vector<Static> statics_;
+  CollisionWorld world_;   // the scene's: its capsules move, its obstacles stay
   std::vector<Pair> pairs_;
   std::vector<std::string> classes_;
   std::vector<StateClearance> best_, best_by_class_;

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "csp/dynamics/limits.hpp"
 #include "csp/dynamics/progress.hpp"
 #include "csp/planners/fourier.hpp"
 #include "csp/planners/identifiability.hpp"
@@ -26,7 +27,7 @@ struct ExcitationLimits {
   double position_margin = 5.0 * 3.14159265358979323846 / 180.0;   // inside q_min/q_max [rad] (Gaz et al.)
   double dq = 0.6, ddq = 0.5, dddq = 0.5, tau = 0.7;                 // of dq_max (FR3: dq_upper/lower(q)), ddq_max, dddq_max, tau_max
   double dtau = 1000.0;                                              // [N m/s]
-  double power = 80.0;                                               // sum_j max(0, tau_j dq_j) [W]
+  double power = kDefaultPowerMax;                                   // joint_power, sum_j max(0, tau_j dq_j) [W]
   double tool_speed = 1.0;                                           // TCP speed [m/s]
 };
 

@@ -35,7 +35,7 @@ struct TimingLimits {
   double jerk = 0.5;           // of dddq_max
   double torque = 0.7;         // of tau_max, against RNEA (gravity included) plus the model's friction
   double torque_rate = 0.5;    // of dtau_max, the rate of that torque (as jerk: the derivative's share)
-  double power = 80.0;         // sum_j max(0, tau_j dq_j) [W] (the emulator's power_limit_violation bound)
+  double power = kDefaultPowerMax;   // joint_power, sum_j max(0, tau_j dq_j) [W] (the robot's power_limit_violation bound)
   double tool_speed = 0.25;    // TCP speed [m/s] (assumption: a slow approach near a patient)
 };
 

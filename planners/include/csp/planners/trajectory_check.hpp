@@ -26,8 +26,8 @@
 namespace csp::planners {
 
 struct CheckOptions {
-  // The emulator's power limit (rt::EmulatorSettings::power_limit; ISO 10218-1 5.10.5) [W].
-  double power_limit = 80.0;
+  // [W]: the robot's default (JointLimits::power_max; csp plan check --power-limit changes it).
+  double power_limit = kDefaultPowerMax;
   // TCP speed [m/s]; <= 0: the robot file's Cartesian translation limit.
   double tool_speed_limit = 0.0;
   // false: every pair exactly at every sample (the naive baseline of bench/bench_plan_check.cpp).

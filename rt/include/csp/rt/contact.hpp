@@ -99,7 +99,7 @@ class SceneContact {
 
   const Scene& scene() const { return *scene_; }
   const ContactOptions& options() const { return options_; }
-  const std::vector<FrameCapsule>& capsules() const { return capsules_; }
+  const std::vector<FrameCapsule>& capsules() const { return world_.capsules(); }
   ContactState initial_state() const;   // sized for this scene, nothing in contact
 
   // Throws std::invalid_argument naming the scene, the obstacle and the capsule when a capsule
@@ -134,9 +134,6 @@ class SceneContact {
   int required_substeps(const Model& plant, Data& data, const Vector7& q, const ContactState& state, int base) const;
 
  private:
-  struct Pair {
-    int capsule, obstacle;
-  };
   void evaluate_obstacles(const Model& plant, Data& data, double t, const Vector7& q, const Vector7& dq,
                           ContactState& state) const;
   void add_force(const Data& data, int link, const Vector3& point, const Vector3& force, bool on_tool,
@@ -145,10 +142,10 @@ class SceneContact {
   std::shared_ptr<const Scene> scene_;
   ContactOptions options_;
   std::vector<TissueElement> tissue_;
-  std::vector<FrameCapsule> capsules_;
+  CollisionWorld world_;                    // the scene's capsules and obstacles
   std::vector<const Material*> material_;   // per obstacle; null: no contact
   std::vector<Aabb> obstacle_box_;          // per obstacle at rest, grown by its motion's amplitude
-  std::vector<Pair> pairs_;                 // capsules that can touch obstacles with a material
+  std::vector<CapsuleObstaclePair> pairs_;  // capsules that can touch obstacles with a material
 };
 
 }  // namespace csp::rt

@@ -28,7 +28,6 @@
 namespace csp::rt {
 
 inline constexpr double kDeltaT = 1e-3;   // FCI cycle [s] (libfranka kDeltaT)
-inline constexpr double kLimitTolerance = 1e-9;   // round-off allowance on every limit check
 
 // What a motion commands (libfranka's Robot::control overloads): joint-level torques, or one of
 // the four external motion generators.
@@ -119,7 +118,6 @@ struct EmulatorSettings {
   int substeps = 2;                      // plant integration steps per 1 ms cycle
   double torque_loop_bandwidth_hz = 300.0;   // first-order inner torque loop
   double tau_ext_cutoff_hz = 30.0;       // low-pass of tau_ext_hat_filtered
-  double power_limit = 80.0;             // sum of positive joint powers tau_J dq [W] (ISO 10218-1 5.10.5)
   bool gravity_compensation = true;      // always on for a real robot; off only to test the plant
   Vector7 tau_J_noise = Vector7::Zero(); // standard deviation of the torque-sensor noise [N m]
   Vector7 tau_J_bias = Vector7::Zero();  // torque-sensor offset [N m]
@@ -274,6 +272,21 @@ class Emulator {
   CartesianImpedance cartesian_impedance_target(const Vector7& q_c, const Vector7& dq_c);
   Vector7 cartesian_impedance_torque(const CartesianImpedance& target, const Vector7& q_c, const Vector7& dq_c,
                                      const Vector7& joint_damping);
+  // The torque loop's setpoint law for one cycle: which of the robot's controllers acts, and its
+  // terms that stay fixed over the cycle's substeps.
+  struct TorqueLoopTarget {
+    bool impedance = false, cartesian = false, braking = false;
+    Vector7 mass_diagonal, damping;   // the robot's model's at the cycle's q; critical joint damping
+    Vector7 q, dq;                    // the held pose (Idle) or the motion generator's setpoint
+    CartesianImpedance cartesian_impedance;
+  };
+  // The parts of integrate(), in order.
+  void hold_on_brakes(double t, const LinkWrenches& f_ext);
+  TorqueLoopTarget torque_loop_target();
+  Vector7 torque_loop_setpoint(const TorqueLoopTarget& target);
+  void plant_substep(double t, double h, const LinkWrenches& f_ext);
+  bool stop_if_diverged(const Vector7& q_before, const LinkWrenches& f_ext);
+  void close_brakes_when_stopped(bool braking);
   void gravity_compensation_torque();
   LinkWrenches external_link_wrenches(double t);
   LinkWrenches with_contact_wrenches(const LinkWrenches& scripted) const;

@@ -9,13 +9,11 @@
 #include <variant>
 #include <vector>
 
+#include "csp/dynamics/collision_world.hpp"
 #include "csp/dynamics/contact.hpp"
-#include "csp/dynamics/geometry.hpp"
 #include "csp/dynamics/model.hpp"
 
 namespace csp {
-
-using Shape = std::variant<Box, Capsule, Sphere, HalfSpace>;
 
 // A periodic rigid motion of an obstacle (breathing): displacement amplitude sin(2 pi f t) [m].
 struct ObstacleMotion {
@@ -99,6 +97,10 @@ Scene load_scene(const std::string& path);
 // The capsules that move with the arm when it carries `tool`: the arm's (franka_arm_capsules, in
 // link order), then the tool's on the flange.
 std::vector<FrameCapsule> arm_and_tool_capsules(const Tool& tool);
+
+// The scene's collision world: the arm's and the tool's capsules (arm_and_tool_capsules) against
+// its obstacles at rest, each with its exempt capsules.
+CollisionWorld collision_world(const Scene& scene);
 
 // The tool's working end (the probe's face, the shaft's tip, the burr's bit): the index in
 // tool.capsules of the capsule whose end cap is nearest to the TCP; -1 for a tool without capsules.
