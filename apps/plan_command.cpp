@@ -48,7 +48,7 @@ std::string verdict(const PlanReport& report) {
 
 struct CheckArguments {
   std::string trajectory, scene, robot = "panda", out;
-  double power_limit = planners::CheckOptions{}.power_limit;
+  double power_limit = 0.0;
   double tool_speed = 0.0;
   bool progress = false;
 };
@@ -191,8 +191,8 @@ Command add_plan_command(CLI::App& app) {
   check_command->add_option("--scene", check->scene, "Scene file, or a shipped scene's name (configs/scenes/)")
       ->required();
   check_command->add_option("--robot", check->robot, "panda, fr3 or a robot file")->capture_default_str();
-  check_command->add_option("--power-limit", check->power_limit, "Power limit [W] (the emulator's)")
-      ->capture_default_str();
+  check_command->add_option("--power-limit", check->power_limit,
+                            "Power limit [W] (default: the robot file's, as the emulator's; 80 W unless it gives one)");
   check_command->add_option("--tool-speed", check->tool_speed,
                             "TCP speed limit [m/s] (default: the robot file's Cartesian translation limit)");
   check_command->add_option("--out", check->out, "Also write report.json, report.md and the figures here");

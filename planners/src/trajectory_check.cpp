@@ -53,13 +53,13 @@ TrajectoryCheck check_trajectory(const JointLog& log, const Model& model, const 
                                  const CheckOptions& options) {
   check_joint_log(log);
   JointLimits limits = model.parameters().joint_limits;
-  limits.power_max = options.power_limit;
+  if (options.power_limit > 0.0) limits.power_max = options.power_limit;
   const std::size_t n = log.size();
   TrajectoryCheck result;
   result.samples = n;
   result.duration = log.t.back() - log.t.front();
   result.rate_hz = static_cast<double>(n - 1) / result.duration;
-  result.power_limit = options.power_limit;
+  result.power_limit = limits.power_max;
   result.tool_speed_limit =
       options.tool_speed_limit > 0.0 ? options.tool_speed_limit : model.parameters().cartesian_limits.translation.v_max;
   result.joints.assign(kNumJoints, JointUsage{});

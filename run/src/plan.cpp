@@ -386,7 +386,8 @@ PlanReport check_trajectory_file(const std::string& trajectory, const std::strin
   const Scene loaded = load_scene(scene_file(scene));
   const std::string robot_path = robot_file(robot);
   const Model model = scene_model(robot_path, loaded);
-  if (!(options.power_limit > 0.0)) throw std::invalid_argument("--power-limit: expected a positive power [W]");
+  if (!(options.power_limit >= 0.0))
+    throw std::invalid_argument("--power-limit: expected a power >= 0 [W] (0: the robot file's)");
   if (options.tool_speed_limit < 0.0)
     throw std::invalid_argument("--tool-speed: expected a speed >= 0 [m/s] (0: the robot file's)");
   const JointLog log = read_joint_log_csv(trajectory);

@@ -26,8 +26,8 @@
 namespace csp::planners {
 
 struct CheckOptions {
-  // [W]: the robot's default (JointLimits::power_max; csp plan check --power-limit changes it).
-  double power_limit = kDefaultPowerMax;
+  // [W]; <= 0: the robot file's (JointLimits::power_max, kDefaultPowerMax unless the file gives one).
+  double power_limit = 0.0;
   // TCP speed [m/s]; <= 0: the robot file's Cartesian translation limit.
   double tool_speed_limit = 0.0;
   // false: every pair exactly at every sample (the naive baseline of bench/bench_plan_check.cpp).
