@@ -6,7 +6,6 @@
 
 #include "csp/io/robot_config.hpp"
 #include "csp/io/svg_plot.hpp"
-#include "csp/io/yaml_field.hpp"
 #include "csp/planners/checker.hpp"
 #include "csp/planners/kmedoids.hpp"
 #include "csp/planners/profile.hpp"
