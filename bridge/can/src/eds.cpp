@@ -7,12 +7,6 @@ namespace csp::can {
 
 namespace {
 
-std::string hex(int64_t value, int digits) {
-  char text[24];
-  std::snprintf(text, sizeof text, "0x%0*llX", digits, static_cast<unsigned long long>(value));
-  return text;
-}
-
 std::string eds_value(const Entry& e, int64_t value) {
   if (e.type == DataType::kVisibleString) return e.text;
   if (e.plus_node_id) return "$NODEID+" + hex(value, 0);

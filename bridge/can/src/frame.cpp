@@ -46,4 +46,10 @@ Frame parse_frame(const std::string& text) {
   return frame;
 }
 
+std::string hex(uint64_t value, int digits) {
+  char text[24];
+  std::snprintf(text, sizeof text, "0x%0*llX", digits, static_cast<unsigned long long>(value));
+  return text;
+}
+
 }  // namespace csp::can

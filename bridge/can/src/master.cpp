@@ -11,12 +11,6 @@
 namespace csp::can {
 namespace {
 
-std::string hex(uint32_t value, int digits) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%0*X", digits, value);
-  return text;
-}
-
 // A target in the drive's units, saturated to the object's type.
 int64_t raw(double value, double step, int64_t low, int64_t high) {
   if (!std::isfinite(value)) return 0;

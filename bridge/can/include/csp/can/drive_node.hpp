@@ -47,7 +47,7 @@ struct JointCommand {
 };
 
 // The services hold references into the node: it is neither copied nor moved.
-class DriveNode : private ObjectWriter {
+class DriveNode final : private ObjectWriter {
  public:
   // Powers the node on: defaults, 402 "switch on disabled", boot-up message into `out`.
   DriveNode(uint8_t node_id, const JointDrive& drive, const Identity& identity, std::vector<Frame>& out);

@@ -46,6 +46,9 @@ bool is_valid(const Frame& frame);
 std::string to_string(const Frame& frame);
 // The inverse of to_string; std::invalid_argument naming what is wrong.
 Frame parse_frame(const std::string& text);
+// "0x1A00": a value in hexadecimal as CiA 306 and messages write object indices and values,
+// `digits` wide at least (0: as many as it takes).
+std::string hex(uint64_t value, int digits);
 
 // Little-endian field access (CANopen transmits least significant byte first).
 inline uint64_t get_le(const uint8_t* bytes, int size) {
