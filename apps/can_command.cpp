@@ -1,5 +1,5 @@
 // csp can: the arm's joint drives on a CANopen bus (docs/can.md). `csp can serve` runs them on
-// SocketCAN; `csp can eds` and `csp can dbc` print the files generated from the drives' object table.
+// SocketCAN (a run whose command source is the CAN bus); `csp can eds` and `csp can dbc` print the files generated from the drives' object table.
 #include <atomic>
 #include <cstdio>
 #include <fstream>
@@ -9,7 +9,8 @@
 
 #include "commands.hpp"
 #include "csp/can/export.hpp"
-#include "csp/can/serve.hpp"
+#include "csp/run/can_source.hpp"
+#include "csp/run/observers.hpp"
 
 namespace csp::cli {
 namespace {
@@ -25,7 +26,7 @@ struct CanArguments {
   bool sync_producer = false;
   double bitrate = 1e6;
   int split = 1;
-  std::string log;
+  std::string log, csv;
 };
 
 int write_text(const std::string& text, const std::string& path) {
@@ -48,9 +49,6 @@ int run_serve(const CanArguments& args) {
   options.bitrate = args.bitrate;
   options.log_path = args.log;
   options.duration = scenario.duration;
-  // Ctrl-C / SIGTERM end the run cleanly: the log keeps every cycle run.
-  const std::atomic<bool>& interrupted = stop_on_signals();
-  options.stop = &interrupted;
   std::vector<std::string> names;
   try {
     names = can::split_interfaces(args.iface, args.split);
@@ -65,10 +63,14 @@ int run_serve(const CanArguments& args) {
   std::printf("csp can serve: %s (%s), %s clock%s, up to %.3f s on %s\n", scenario.name.c_str(), scenario.path.c_str(),
               args.clock.c_str(), args.sync_producer ? ", CSP sends SYNC" : ", the master sends SYNC", options.duration, list.c_str());
   std::fflush(stdout);
-  const can::CanServeReport r = can::serve(scenario, options);
+  run::Run run(scenario);
+  const std::unique_ptr<run::CsvLogObserver> csv = run::observe_csv_log(run, args.csv);
+  run::CanBusSource bus(options);
+  // Ctrl-C / SIGTERM end the run cleanly: the logs keep every cycle run.
+  const run::RunResult result = run.run(bus, &stop_on_signals());
 
+  const can::CanServeReport& r = bus.report();
   print_timing(r.timing, "round trip SYNC -> enabled RPDOs");
-  if (interrupted) std::printf("  interrupted\n");
   std::printf("  motions %llu, motion cycles %llu, lost commands %llu (longest run %d), reflexes %llu, error recoveries %llu\n",
               static_cast<unsigned long long>(r.arm.motions), static_cast<unsigned long long>(r.emulator.motion_cycles),
               static_cast<unsigned long long>(r.emulator.lost_commands), r.emulator.max_consecutive_lost,
@@ -93,7 +95,9 @@ int run_serve(const CanArguments& args) {
   }
   if (!r.last_reflex.empty()) std::printf("  last reflex: %s\n", r.last_reflex.c_str());
   if (!args.log.empty()) std::printf("  log: %s (%llu events)\n", args.log.c_str(), static_cast<unsigned long long>(r.log_events));
-  return 0;
+  if (csv) std::printf("  CSV log: %s (%llu rows)\n", args.csv.c_str(), static_cast<unsigned long long>(csv->log().rows()));
+  // A signal is how a serve is meant to end: exit status 0.
+  return print_early_end(result.observer_failure, result.stopped, run.emulator().state().time.toSec(), 0).value_or(0);
 }
 
 }  // namespace
@@ -117,6 +121,7 @@ Command add_can_command(CLI::App& app) {
       ->check(CLI::Range(1, 7))
       ->capture_default_str();
   serve->add_option("--log", args->log, "Record the session as an LCM log (csp replay re-simulates it)");
+  serve->add_option("--csv", args->csv, "Write the per-cycle CSV log of the robot (docs/joint-log.md; csp gap reads it)");
   serve->add_option("--duration", args->scenario.duration, "Robot time to serve [s] (default: the scenario's)");
   CLI::App* eds = cmd->add_subcommand("eds", "Print the EDS (CiA 306) of a joint drive");
   eds->add_option("--node", args->node, "Node id 1..7 = joint 1..7 (the default assignment)")

@@ -131,4 +131,14 @@ void print_timing(const rt::TimingReport& timing, const char* round_trip) {
   for (const std::string& warning : timing.warnings) std::printf("  warning: %s\n", warning.c_str());
 }
 
+std::optional<int> print_early_end(const std::string& observer_failure, bool stopped, double robot_time, int signal_status) {
+  if (!observer_failure.empty()) {
+    std::printf("  STOPPED at t = %.3f s: %s\n", robot_time, observer_failure.c_str());
+    return 1;
+  }
+  if (!stopped) return std::nullopt;
+  std::printf("  STOPPED at t = %.3f s by a signal (Ctrl-C or SIGTERM)\n", robot_time);
+  return signal_status;
+}
+
 }  // namespace csp::cli

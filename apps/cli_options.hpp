@@ -57,4 +57,9 @@ std::atomic<bool>& stop_on_signals();
 // what the round trip measured ("controller compute time", "state -> command").
 void print_timing(const rt::TimingReport& timing, const char* round_trip);
 
+// How a run ended early, the same line for every front end (run::RunResult): an observer that failed
+// (a log that could not be written: exit status 1) or a signal (`signal_status`). `robot_time`:
+// where it ended [s]. Returns the exit status, nullopt for a run that went to its end.
+std::optional<int> print_early_end(const std::string& observer_failure, bool stopped, double robot_time, int signal_status);
+
 }  // namespace csp::cli

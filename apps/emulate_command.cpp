@@ -11,6 +11,7 @@
 #include "progress.hpp"
 #include "csp/io/svg_plot.hpp"
 #include "csp/run/observers.hpp"
+#include "csp/run/sources.hpp"
 
 namespace csp::cli {
 namespace {
@@ -53,36 +54,33 @@ int run_emulate(const EmulateArguments& args) {
   // The run and its observers: progress, the task's measure (a scene's medical metrics, else the
   // joint tracking), the logs.
   run::Run run(scenario);
+  run::ControllerSource controller(run);
   ProgressMeter progress("csp emulate", args.progress);
   run::ProgressObserver progress_observer(progress.callback(), "simulated seconds", scenario.duration, run.emulator());
   run.observe(progress_observer);
   std::unique_ptr<run::MedicalObserver> medical;
   std::unique_ptr<run::TrackingObserver> tracking;
   if (scenario.emulator.scene) {
-    medical = std::make_unique<run::MedicalObserver>(run);
+    medical = std::make_unique<run::MedicalObserver>(run, controller.controller().status);
     run.observe(*medical);
   } else {
     tracking = std::make_unique<run::TrackingObserver>(run::scenario_reference(scenario, run.emulator()), run.emulator());
     run.observe(*tracking);
   }
-  std::unique_ptr<run::CsvLogObserver> log;
-  if (!args.log.empty()) {
-    log = std::make_unique<run::CsvLogObserver>(args.log, run.emulator());
-    run.observe(*log);
-  }
+  const std::unique_ptr<run::CsvLogObserver> log = run::observe_csv_log(run, args.log);
   std::unique_ptr<run::LcmLogObserver> lcm_log;
   if (!args.lcm_log.empty()) {
-    lcm_log = std::make_unique<run::LcmLogObserver>(args.lcm_log, run);
+    lcm_log = std::make_unique<run::LcmLogObserver>(args.lcm_log, run, controller.controller().mode);
     run.observe(*lcm_log);
   }
 
   std::printf("csp emulate: %s (%s)\n  robot %s, %s clock, %.3f s, seed %llu, controller %s (%s mode)\n",
               scenario.name.c_str(), scenario.path.c_str(), scenario.robot_file.c_str(), rt::clock_name(scenario.clock),
               scenario.duration, static_cast<unsigned long long>(scenario.seed), scenario.controller.type.c_str(),
-              rt::control_mode_name(run.controller().mode));
+              rt::control_mode_name(controller.controller().mode));
   // Ctrl-C (or SIGTERM) and a log that cannot be written end the motion as its duration would:
   // the robot holds, the summary is printed, the logs end with whole rows and events.
-  const run::RunResult result = run.run_builtin_controller(&stop_on_signals());
+  const run::RunResult result = run.run(controller, &stop_on_signals());
 
   const rt::EmulatorCounters& counters = run.emulator().counters();
   progress.finish(format("%llu cycles (%.3f s of motion)", static_cast<unsigned long long>(counters.motion_cycles),
@@ -101,20 +99,14 @@ int run_emulate(const EmulateArguments& args) {
       std::printf("  figures: %s/force.svg, path.svg, penetration.svg\n", args.report.c_str());
     }
   }
-  print_timing(result.motion.timing, "controller compute time");
+  print_timing(controller.motion().timing, "controller compute time");
   if (log) std::printf("  log: %s (%llu rows)\n", log->log().path().c_str(), static_cast<unsigned long long>(log->log().rows()));
   if (lcm_log) std::printf("  LCM log: %s (%llu events)\n", args.lcm_log.c_str(), static_cast<unsigned long long>(lcm_log->events()));
 
   const rt::RobotState& state = run.emulator().state();
-  if (!result.observer_failure.empty()) {
-    std::printf("  STOPPED at t = %.3f s: %s\n", state.time.toSec(), result.observer_failure.c_str());
-    return 1;
-  }
-  if (result.stopped) {
-    std::printf("  STOPPED at t = %.3f s by a signal (Ctrl-C or SIGTERM)\n", state.time.toSec());
-    return 130;
-  }
-  if (result.reflex() || state.robot_mode == rt::RobotMode::kReflex) {
+  if (const std::optional<int> status = print_early_end(result.observer_failure, result.stopped, state.time.toSec(), 130))
+    return *status;
+  if (controller.reflex() || state.robot_mode == rt::RobotMode::kReflex) {
     std::printf("  REFLEX at t = %.3f s: %s\n", state.time.toSec(), run.emulator().reflex_reason().c_str());
     return 1;
   }

@@ -1,5 +1,5 @@
-// csp replay: re-simulate a CSP log and report how far the states differ from the recorded ones,
-// or play a log back onto LCM like lcm-logplayer.
+// csp replay: re-simulate a CSP log (a run whose command source is the log) and report how far the
+// states differ from the recorded ones, or play a log back onto LCM like lcm-logplayer.
 #include <atomic>
 #include <cstdio>
 #include <memory>
@@ -8,13 +8,15 @@
 #include "commands.hpp"
 #include "progress.hpp"
 #include "csp/bridge/replay.hpp"
+#include "csp/run/observers.hpp"
+#include "csp/run/sources.hpp"
 
 namespace csp::cli {
 namespace {
 
 
 struct ReplayArguments {
-  std::string log, scenario;
+  std::string log, scenario, csv;
   bool play = false;
   double speed = 1.0;
   double max_gap = 10.0;
@@ -24,6 +26,7 @@ struct ReplayArguments {
 
 int run_replay(const ReplayArguments& args) {
   if (args.play && !args.scenario.empty()) throw UsageError("--scenario: re-simulation only; --play publishes the log as it is");
+  if (args.play && !args.csv.empty()) throw UsageError("--csv: re-simulation only; --play publishes the log as it is");
   if (args.play) {
     bridge::PlaybackOptions options;
     options.speed = args.speed;
@@ -43,8 +46,14 @@ int run_replay(const ReplayArguments& args) {
     std::fprintf(stderr, "csp replay: %s\n", r.damage.c_str());
     return 1;
   }
+  const bridge::Recording recording(args.log, args.scenario);
+  run::Run run(recording.scenario);
+  const std::unique_ptr<run::CsvLogObserver> csv = run::observe_csv_log(run, args.csv);
   ProgressMeter progress("csp replay", args.progress);
-  const bridge::ResimulationReport r = bridge::resimulate(args.log, args.scenario, progress.callback());
+  run::LogReplaySource replay(recording, progress.callback());
+  // Ctrl-C / SIGTERM end the re-simulation where it is; what it compared is reported.
+  const run::RunResult result = run.run(replay, &stop_on_signals());
+  const bridge::ResimulationReport& r = replay.report();
   progress.finish(std::to_string(r.states) + " states re-simulated: " +
                   (r.identical() ? "identical, bit for bit" : std::to_string(r.differing_states) + " differ"));
   std::printf("csp replay: %s: re-simulated %llu states from %llu recorded commands and requests\n  scenario: %s\n",
@@ -60,6 +69,9 @@ int run_replay(const ReplayArguments& args) {
     std::printf("  NOT a full replay: only the readable part was re-simulated\n");
     std::fprintf(stderr, "csp replay: %s\n", r.damage.c_str());
   }
+  if (csv) std::printf("  CSV log of the re-simulation: %s (%llu rows)\n", args.csv.c_str(), static_cast<unsigned long long>(csv->log().rows()));
+  if (const std::optional<int> status = print_early_end(result.observer_failure, result.stopped, run.emulator().state().time.toSec(), 130))
+    return *status;
   if (r.identical()) std::printf("  identical to the recorded states, bit for bit\n");
   return r.identical() ? 0 : 1;
 }
@@ -72,6 +84,7 @@ Command add_replay_command(CLI::App& app) {
   cmd->add_option("log", args->log, "LCM log file")->required();
   cmd->add_option("--scenario", args->scenario,
                   "The scenario the robot ran, for a recording without its CSP_SCENARIO record (used instead of the record if given)");
+  cmd->add_option("--csv", args->csv, "Write the per-cycle CSV log of the re-simulated robot (docs/joint-log.md; csp gap reads it)");
   cmd->add_flag("--play", args->play, "Publish the log's events on LCM at their recorded timing, like lcm-logplayer");
   cmd->add_option("--speed", args->speed, "--play: speed factor (2: twice as fast, 0: as fast as possible)")->capture_default_str();
   cmd->add_option("--max-gap", args->max_gap, "--play: seconds of log time beyond which a timestamp jump is not waited for")

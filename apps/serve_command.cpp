@@ -1,5 +1,6 @@
 // csp serve: the emulated robot on an LCM bus for a controller in another process
-// (docs/bridge.md); optionally records the session as an LCM log.
+// (docs/bridge.md): a run whose command source is the bus; optionally records the session as an
+// LCM log and the robot's cycles as a CSV log.
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -8,7 +9,8 @@
 
 #include "commands.hpp"
 #include "csp/bridge/lcm_url.hpp"
-#include "csp/bridge/serve.hpp"
+#include "csp/run/observers.hpp"
+#include "csp/run/sources.hpp"
 
 namespace csp::cli {
 namespace {
@@ -18,7 +20,7 @@ struct ServeArguments {
   ScenarioArguments scenario;
   std::string lcm_url = bridge::kDefaultLcmUrl;
   std::string prefix;
-  std::string log;
+  std::string log, csv;
   double lockstep_timeout = 1.0;
   bool wait = false;
 };
@@ -36,19 +38,20 @@ int run_serve(const ServeArguments& args) {
   options.log_path = args.log;
   options.lockstep_timeout = args.lockstep_timeout;
   options.wait_for_controller = args.wait;
-  // Ctrl-C / SIGTERM end the run cleanly: the log keeps every cycle run.
-  const std::atomic<bool>& interrupted = stop_on_signals();
-  options.stop = &interrupted;
+  run::Run run(scenario);
+  const std::unique_ptr<run::CsvLogObserver> csv = run::observe_csv_log(run, args.csv);
+  run::LcmBusSource bus(options);
 
   std::printf("csp serve: %s (%s), %s clock, %.3f s on %s, channels %sCSP_*\n", scenario.name.c_str(), scenario.path.c_str(),
               options.clock == rt::Clock::kLockstep ? "lockstep" : "real-time", options.duration, options.lcm_url.c_str(),
               options.channel_prefix.c_str());
   std::fflush(stdout);
-  const bridge::ServeReport r = bridge::serve(scenario, options);
+  // Ctrl-C / SIGTERM end the run cleanly: the logs keep every cycle run.
+  const run::RunResult result = run.run(bus, &stop_on_signals());
 
+  const bridge::ServeReport& r = bus.report();
   const bridge::ServerCounters& c = r.counters;
   print_timing(r.timing, "round trip state -> command");
-  if (interrupted) std::printf("  interrupted\n");
   std::printf("  sessions %llu, motion cycles %llu, lost commands %llu (longest run %d), reflexes %llu\n",
               static_cast<unsigned long long>(c.sessions), static_cast<unsigned long long>(r.emulator.motion_cycles),
               static_cast<unsigned long long>(r.emulator.lost_commands), r.emulator.max_consecutive_lost,
@@ -63,7 +66,9 @@ int run_serve(const ServeArguments& args) {
   if (!args.log.empty())
     std::printf("  log: %s (%llu events, %llu states)\n", args.log.c_str(), static_cast<unsigned long long>(r.log_events),
                 static_cast<unsigned long long>(r.state_messages));
-  return 0;
+  if (csv) std::printf("  CSV log: %s (%llu rows)\n", args.csv.c_str(), static_cast<unsigned long long>(csv->log().rows()));
+  // A signal is how a serve is meant to end: exit status 0.
+  return print_early_end(result.observer_failure, result.stopped, run.emulator().state().time.toSec(), 0).value_or(0);
 }
 
 }  // namespace
@@ -75,6 +80,7 @@ Command add_serve_command(CLI::App& app) {
   cmd->add_option("--lcm-url", args->lcm_url, "LCM provider URL")->capture_default_str();
   cmd->add_option("--prefix", args->prefix, "Prefix of every channel name (several robots on one bus)");
   cmd->add_option("--log", args->log, "Record the session as an LCM log file");
+  cmd->add_option("--csv", args->csv, "Write the per-cycle CSV log of the robot (docs/joint-log.md; csp gap reads it)");
   cmd->add_option("--lockstep-timeout", args->lockstep_timeout, "Lockstep: how long a cycle waits for its command [s]")
       ->capture_default_str();
   cmd->add_flag("--wait", args->wait, "Lockstep: hold the first cycle until a controller starts a session");

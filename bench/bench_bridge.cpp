@@ -33,7 +33,9 @@ void run_session(const char* title, csp::rt::Clock clock, double seconds, int po
   csp::test::Process controller({CSP_LCM_FLOAT, "--lcm-url", url, "--duration", std::to_string(seconds)},
                                 csp::test::temp_path("bench-controller.out"));
   const double self_cpu = cpu_seconds(RUSAGE_SELF), children_cpu = cpu_seconds(RUSAGE_CHILDREN);
-  const csp::bridge::ServeReport r = csp::bridge::serve(csp::rt::load_scenario(csp::rt::default_scenario_path()), options);
+  const csp::rt::Scenario scenario = csp::rt::load_scenario(csp::rt::default_scenario_path());
+  csp::rt::Emulator robot(scenario.emulator);
+  const csp::bridge::ServeReport r = csp::bridge::serve(robot, scenario, options);
   const int exit_code = controller.wait(10s);
   std::printf("%s: %llu cycles in %.3f s; session %llu cycles in %.3f s = %.0f cycles/s; lost commands %llu; overruns %llu\n",
               title, static_cast<unsigned long long>(r.timing.cycles), r.timing.wall_seconds,

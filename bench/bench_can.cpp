@@ -86,7 +86,9 @@ std::array<int16_t, kJoints> hold(const State& start, const State& now) {
 }
 
 void BM_CstCycleThroughRobotServer(benchmark::State& state) {
-  ServerArm arm(rt::load_scenario(rt::default_scenario_path()), "", [](const std::string&) {});
+  const rt::Scenario scenario = rt::load_scenario(rt::default_scenario_path());
+  rt::Emulator robot(scenario.emulator);
+  ServerArm arm(robot, scenario, "", [](const std::string&) {});
   InMemoryMaster master(arm);
   const rt::Emulator& emulator = arm.server().emulator();
   const rt::RobotState start = emulator.state();

@@ -372,7 +372,8 @@ Class lcm_messages() {
           [](const std::string& script) -> Verdict {
             const rt::Scenario scenario = rt::load_scenario(rt::default_scenario_path());
             const bridge::Channels channels;
-            bridge::RobotServer server(scenario.emulator, channels, [](const std::string&, const std::vector<uint8_t>&) {},
+            rt::Emulator robot(scenario.emulator);
+            bridge::RobotServer server(robot, channels, [](const std::string&, const std::vector<uint8_t>&) {},
                                        [](const std::string&) {});
             try {
               for (std::size_t at = 0; at + 5 <= script.size();) {

@@ -93,7 +93,7 @@ TEST(BridgeMessages, StrictDecodingNamesTheProblem) {
 // The server core with a recorder of what it sends.
 struct TestServer {
   explicit TestServer(const rt::EmulatorSettings& settings)
-      : server(settings, channels, [this](const std::string& channel, const std::vector<uint8_t>& bytes) { sent.emplace_back(channel, bytes); },
+      : robot(settings), server(robot, channels, [this](const std::string& channel, const std::vector<uint8_t>& bytes) { sent.emplace_back(channel, bytes); },
                [this](const std::string& line) { diagnostics.push_back(line); }) {}
 
   config_reply_t request(config_request_t r) {
@@ -120,6 +120,7 @@ struct TestServer {
   Channels channels;
   std::vector<std::pair<std::string, std::vector<uint8_t>>> sent;
   std::vector<std::string> diagnostics;
+  rt::Emulator robot;
   RobotServer server;
   int64_t request_id = 0;
 };
@@ -293,7 +294,8 @@ void write_bus_recording(const std::string& path, const rt::Scenario& scenario, 
   const Channels channels("ARM1_"), other("ARM2_");
   const std::vector<uint8_t> record = encode(scenario_message(scenario, "ARM1_"));
   std::vector<std::pair<std::string, std::vector<uint8_t>>> replies;
-  RobotServer server(scenario.emulator, channels, [&](const std::string& channel, const std::vector<uint8_t>& bytes) {
+  rt::Emulator robot(scenario.emulator);
+  RobotServer server(robot, channels, [&](const std::string& channel, const std::vector<uint8_t>& bytes) {
     if (channel == channels.config_reply) replies.emplace_back(channel, bytes);
   }, [](const std::string&) {});
   const rt::Controller controller =

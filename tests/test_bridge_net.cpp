@@ -11,6 +11,7 @@
 #include "csp/bridge/controllers.hpp"
 #include "csp/bridge/csv_convert.hpp"
 #include "csp/bridge/replay.hpp"
+#include "csp/rt/csv_log.hpp"
 #include "support.hpp"
 
 namespace csp::bridge {
@@ -31,14 +32,16 @@ std::vector<status_t> statuses_in_log(const std::string& path) {
 }
 
 // csp serve (lockstep) + csp_lcm_joint_impedance in two processes for 2000+ cycles: no lost
-// command, the states of the in-process run, and a log that replays bit for bit. The controller
+// command, the states of the in-process run (the LCM log's states and the --csv log's rows), and a
+// log that replays bit for bit. The controller
 // starts 2 s after the server: the round trip (rt::TimingReport) times a session's states only,
 // not the wait for a controller.
 TEST(BridgeNet, LockstepExternalControllerMatchesInProcessRun) {
   const std::string url = test::unique_lcm_url(0), log = test::temp_path("lockstep.lcmlog");
+  const std::string csv = test::temp_path("lockstep.csv"), reference_csv = test::temp_path("lockstep_reference.csv");
   const double motion = 2.0;
   test::Process server({CSP_EXECUTABLE, "serve", test::kDefaultScenario, "--clock", "lockstep", "--wait", "--duration", "2.1",
-                        "--lockstep-timeout", "5", "--lcm-url", url, "--log", log},
+                        "--lockstep-timeout", "5", "--lcm-url", url, "--log", log, "--csv", csv},
                        test::temp_path("serve.out"));
   std::this_thread::sleep_for(2s);
   test::Process controller({CSP_LCM_JOINT_IMPEDANCE, "--lcm-url", url, "--duration", "2", "--amplitude", "0.2", "--timeout", "30"},
@@ -61,14 +64,23 @@ TEST(BridgeNet, LockstepExternalControllerMatchesInProcessRun) {
   const rt::Scenario scenario = rt::load_scenario(test::kDefaultScenario);
   rt::Emulator emulator(scenario.emulator);
   std::vector<robot_state_t> reference{to_message(emulator.state(), 0, false)};
-  rt::LoopOptions options;
-  options.observer = [&](const rt::RobotState& s, const rt::CycleInfo& c) { reference.push_back(to_message(s, 0, c.command_received)); };
-  rt::run_motion(emulator, rt::ControlMode::kTorque,
-                 joint_impedance_controller(example_joint_stiffness(), example_joint_damping(), example_excitation(0.2), motion), options);
-  while (reference.size() < served.size()) {
-    emulator.step(nullptr);
-    reference.push_back(to_message(emulator.state(), 0, false));
+  {
+    rt::CsvLog reference_log(reference_csv);
+    reference_log.write(emulator.state(), rt::CycleInfo{});
+    rt::LoopOptions options;
+    options.observer = [&](const rt::RobotState& s, const rt::CycleInfo& c) {
+      reference.push_back(to_message(s, 0, c.command_received));
+      reference_log.write(s, c);
+    };
+    rt::run_motion(emulator, rt::ControlMode::kTorque,
+                   joint_impedance_controller(example_joint_stiffness(), example_joint_damping(), example_excitation(0.2), motion), options);
+    while (reference.size() < served.size()) {
+      emulator.step(nullptr);
+      reference.push_back(to_message(emulator.state(), 0, false));
+      reference_log.write(emulator.state(), rt::CycleInfo{});
+    }
   }
+  EXPECT_EQ(test::read_text(csv), test::read_text(reference_csv)) << "the --csv log of the served robot";
   for (std::size_t i = 0; i < served.size(); ++i) {
     std::string field;
     ASSERT_EQ(state_difference(served[i], reference[i], field), 0.0) << "state " << i << ": " << field;
@@ -78,6 +90,8 @@ TEST(BridgeNet, LockstepExternalControllerMatchesInProcessRun) {
   EXPECT_EQ(replay.states, served.size());
   EXPECT_EQ(replay.differing_states, 0u) << replay.first_difference;
   std::filesystem::remove(log);
+  std::filesystem::remove(csv);
+  std::filesystem::remove(reference_csv);
 }
 
 // Real time, a controller that stops answering after 300 commands: the robot ends the session

@@ -39,13 +39,16 @@ double torque_step(int j) { return j < 4 ? 3e-3 : 0.5e-3; }
 // The ServerArm, recording the emulator's joint positions after each cycle.
 class RecordingArm : public Arm {
  public:
-  explicit RecordingArm(const std::string& log) : arm(rt::load_scenario(rt::default_scenario_path()), log, [](const std::string&) {}) {}
+  explicit RecordingArm(const std::string& log)
+      : scenario(rt::load_scenario(rt::default_scenario_path())), robot(scenario.emulator), arm(robot, scenario, log, [](const std::string&) {}) {}
   ArmState cycle(const ArmCommand& command) override {
     const ArmState state = arm.cycle(command);
     q.push_back(arm.server().emulator().state().q);
     return state;
   }
   ArmState measured() const override { return arm.measured(); }
+  rt::Scenario scenario;
+  rt::Emulator robot;
   ServerArm arm;
   std::vector<std::array<double, 7>> q;
 };

@@ -42,21 +42,17 @@ std::string damage_of(const std::string& log_path) {
 
 }  // namespace
 
-ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path, const Progress& progress) {
-  ResimulationReport report;
-  std::vector<std::string> missing;
+Recording::Recording(const std::string& path, const std::string& scenario_path) : log_path(path) {
   const LogOutline contents = outline(log_path);
   const std::vector<scenario_t>& records = contents.scenario_records;
-  const std::vector<std::string>& channel_names = contents.channels;
-  rt::Scenario scenario;
   std::optional<std::string> prefix;
   if (!records.empty()) prefix = records.front().channel_prefix;
   if (!scenario_path.empty()) {
     scenario = rt::load_scenario(scenario_path);
-    report.scenario = scenario_path + " (--scenario)" + (records.empty() ? "" : ", not the log's own record");
+    scenario_origin = scenario_path + " (--scenario)" + (records.empty() ? "" : ", not the log's own record");
     if (records.empty()) {
-      missing.push_back("no CSP_SCENARIO record");
-      prefix = first_state_prefix(channel_names);
+      missing = "no CSP_SCENARIO record";
+      prefix = first_state_prefix(contents.channels);
     }
   } else if (!records.empty()) {
     try {
@@ -64,7 +60,7 @@ ResimulationReport resimulate(const std::string& log_path, const std::string& sc
     } catch (const std::exception& e) {
       throw std::runtime_error(log_path + ": " + e.what());
     }
-    report.scenario = "the log's CSP_SCENARIO record (" + records.front().path + ")";
+    scenario_origin = "the log's CSP_SCENARIO record (" + records.front().path + ")";
   } else {
     const std::string damage = damage_of(log_path);
     throw std::runtime_error(log_path + ": no CSP_SCENARIO record (not a recording of csp serve or csp emulate --lcm-log, or one " +
@@ -72,33 +68,42 @@ ResimulationReport resimulate(const std::string& log_path, const std::string& sc
                              (damage.empty() ? "" : "; " + damage));
   }
   if (!prefix) throw std::runtime_error(log_path + ": no robot state (no channel named ...CSP_STATE)");
-  if (records.size() > 1) report.scenario += "; the log holds " + std::to_string(records.size()) + " robots, this one is prefix `" + *prefix + "`";
+  if (records.size() > 1) scenario_origin += "; the log holds " + std::to_string(records.size()) + " robots, this one is prefix `" + *prefix + "`";
+  channels = Channels(*prefix);
+  has_config_replies = std::find(contents.channels.begin(), contents.channels.end(), channels.config_reply) != contents.channels.end();
+}
 
+ResimulationReport resimulate(const Recording& recording, rt::Emulator& robot, const ResimulationOptions& options) {
+  const std::string& log_path = recording.log_path;
+  const Channels& channels = recording.channels;
+  ResimulationReport report;
+  report.scenario = recording.scenario_origin;
   LogReader log(log_path);
-  const Channels channels(*prefix);
-  RobotServer server(scenario.emulator, channels, [](const std::string&, const std::vector<uint8_t>&) {}, [](const std::string&) {});
+  RobotServer server(robot, channels, [](const std::string&, const std::vector<uint8_t>&) {}, [](const std::string&) {});
   StateCoverage coverage;
   std::optional<int64_t> compared;   // message id of the last state compared
   // A configuration request has no message id, and a recording of the bus may hold it before the
   // state of the cycle the server took it in (it arrived while that state was being published).
   // The server's reply names that cycle: when the log holds replies (all but csp emulate's), each
   // request waits for its reply. A request that does not decode gets no reply: it goes at once.
-  const bool requests_wait_for_replies =
-      std::find(channel_names.begin(), channel_names.end(), channels.config_reply) != channel_names.end();
   std::map<int64_t, std::vector<uint8_t>> requests;   // waiting for their reply, by request_id
+  const auto stopped = [&] { return options.stop && options.stop->load(); };
   const auto run_to = [&](int64_t message_id, const LogEvent& event) {
     // The cycles of the states the recording misses (before its first, in a gap) run with the
     // messages it holds: a missed command shows as a difference in the next state.
     if (message_id > server.message_id() && message_id - server.message_id() > kMaxMissedStates)
       throw std::runtime_error(log_path + ": event " + std::to_string(event.eventnum) + ": message id " + std::to_string(message_id) +
                                " after state " + std::to_string(server.message_id()) + ": more than an hour of states missing");
-    while (server.message_id() < message_id) server.step(event.timestamp);
+    while (server.message_id() < message_id && !stopped()) {
+      server.step(event.timestamp);
+      if (options.after_cycle) options.after_cycle(server.emulator().state(), server.last_cycle());
+    }
   };
-  for (const LogEvent* event = log.next(); event; event = log.next()) {
-    if (log.events() % 1024 == 0) csp::report(progress, "re-simulating (MB of the log)", 1e-6 * log.offset(), 1e-6 * log.size());
+  for (const LogEvent* event = log.next(); event && !stopped(); event = log.next()) {
+    if (log.events() % 1024 == 0) csp::report(options.progress, "re-simulating (MB of the log)", 1e-6 * log.offset(), 1e-6 * log.size());
     config_request_t request;
     config_reply_t reply;
-    if (event->channel == channels.config && requests_wait_for_replies &&
+    if (event->channel == channels.config && recording.has_config_replies &&
         decode_exact(event->data, event->datalen, request) == Rejection::kNone) {
       const auto* bytes = static_cast<const uint8_t*>(event->data);
       requests[request.request_id].assign(bytes, bytes + event->datalen);
@@ -126,6 +131,7 @@ ResimulationReport resimulate(const std::string& log_path, const std::string& sc
       coverage.add(recorded.message_id);
       if (recorded.message_id < server.message_id()) break;         // a new run of the server: the robot cannot go back
       run_to(recorded.message_id, *event);
+      if (server.message_id() != recorded.message_id) break;   // stopped on the way
       compared = recorded.message_id;
       std::string field;
       const double difference = state_difference(recorded, server.state_message(recorded.utime), field);
@@ -136,12 +142,20 @@ ResimulationReport resimulate(const std::string& log_path, const std::string& sc
       if (report.first_difference.empty()) report.first_difference = "time " + std::to_string(recorded.time) + " ms: " + field;
     }
   }
-  if (report.states == 0)
+  if (report.states == 0 && !stopped())
     throw std::runtime_error(log_path + ": no robot state on " + channels.state + (log.damage().empty() ? "" : " (" + log.damage_summary() + ")"));
-  if (!coverage.missing().empty()) missing.push_back(coverage.missing());
-  for (const std::string& part : missing) report.missing += (report.missing.empty() ? "" : "; ") + part;
+  report.missing = recording.missing;
+  if (!coverage.missing().empty()) report.missing += (report.missing.empty() ? "" : "; ") + coverage.missing();
   report.damage = log.damage_summary();
   return report;
+}
+
+ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path, const Progress& progress) {
+  const Recording recording(log_path, scenario_path);
+  rt::Emulator robot(recording.scenario.emulator);
+  ResimulationOptions options;
+  options.progress = progress;
+  return resimulate(recording, robot, options);
 }
 
 PlaybackReport play_back(const std::string& log_path, const PlaybackOptions& options) {

@@ -26,7 +26,7 @@ constexpr uint64_t kScenarioEvery = 1000;
 // The LCM side of one serve run: publication (and logging), reception into the RobotServer.
 class Bus {
  public:
-  Bus(const rt::Scenario& scenario, const ServeOptions& options)
+  Bus(rt::Emulator& robot, const rt::Scenario& scenario, const ServeOptions& options)
       : options_(options),
         channels_(options.channel_prefix),
         lcm_(checked_lcm_url(options.lcm_url)),
@@ -35,7 +35,7 @@ class Bus {
     if (!options.log_path.empty()) log_ = std::make_unique<LogWriter>(options.log_path);
     publish_scenario();   // the first event of the log
     server_ = std::make_unique<RobotServer>(
-        scenario.emulator, channels_, [this](const std::string& channel, const std::vector<uint8_t>& bytes) { publish(channel, bytes); },
+        robot, channels_, [this](const std::string& channel, const std::vector<uint8_t>& bytes) { publish(channel, bytes); },
         [this](const std::string& line) {
           if (!options_.quiet) std::cerr << "csp serve: " << line << '\n';
         });
@@ -100,6 +100,7 @@ class Bus {
   }
 
   bool stopped() const { return options_.stop && options_.stop->load(); }
+  const rt::CycleObserver& after_cycle() const { return options_.after_cycle; }
   uint64_t state_messages() const { return state_messages_; }
   // Publication of the state -> its command received, for a state of a control session.
   std::optional<int64_t> round_trip_ns() const {
@@ -166,6 +167,7 @@ void robot_cycle(Bus& bus, rt::CycleDriver& driver) {
   const uint64_t cycles = driver.cycles();
   if (cycles % kStatusEvery == 0) bus.publish(bus.channels().status, encode(status_message(server, driver.report())));
   if (cycles % kScenarioEvery == 0) bus.publish_scenario();
+  if (bus.after_cycle()) bus.after_cycle()(server.emulator().state(), server.last_cycle());
 }
 
 // Real time: at each deadline the robot steps with the command received since the last state
@@ -212,11 +214,11 @@ void run_lockstep(Bus& bus, rt::CycleDriver& driver, uint64_t cycles, const Serv
 
 }  // namespace
 
-ServeReport serve(const rt::Scenario& scenario, const ServeOptions& options) {
+ServeReport serve(rt::Emulator& robot, const rt::Scenario& scenario, const ServeOptions& options) {
   if (!(options.duration > 0.0) || !std::isfinite(options.duration)) throw std::invalid_argument("duration: expected a positive number of seconds");
   if (!(options.lockstep_timeout > 0.0 && options.lockstep_timeout <= 3600.0))
     throw std::invalid_argument("lockstep timeout: expected a positive number of seconds, at most 3600");
-  Bus bus(scenario, options);
+  Bus bus(robot, scenario, options);
   RobotServer& server = bus.server();
   ServeReport report;
   rt::CycleDriver driver(options.clock);

@@ -14,8 +14,8 @@ bool is_power_of_ten(uint64_t n) {
 
 }  // namespace
 
-RobotServer::RobotServer(const rt::EmulatorSettings& settings, const Channels& channels, Send send, Diagnostic diagnostic)
-    : emulator_(settings), channels_(channels), send_(std::move(send)), diagnostic_(std::move(diagnostic)) {}
+RobotServer::RobotServer(rt::Emulator& robot, const Channels& channels, Send send, Diagnostic diagnostic)
+    : emulator_(robot), channels_(channels), send_(std::move(send)), diagnostic_(std::move(diagnostic)) {}
 
 robot_state_t RobotServer::state_message(int64_t utime) const {
   return to_message(emulator_.state(), utime, command_received_);
@@ -97,6 +97,7 @@ void RobotServer::request(const config_request_t& request, int64_t utime) {
 
 void RobotServer::step(int64_t utime) {
   command_received_ = session_ && command_.has_value();
+  if (command_received_) applied_ = *command_;
   emulator_.step(command_received_ ? &*command_ : nullptr);
   command_.reset();
   if (session_ && !emulator_.in_motion()) {
@@ -106,6 +107,15 @@ void RobotServer::step(int64_t utime) {
                                                  : "control session finished",
           utime);
   }
+}
+
+rt::CycleInfo RobotServer::last_cycle() const {
+  rt::CycleInfo cycle;
+  // The server sees only what arrived: a command sent but lost on the way is not known here.
+  cycle.command_sent = command_received_;
+  cycle.command_received = command_received_;
+  if (command_received_) cycle.command = applied_;
+  return cycle;
 }
 
 }  // namespace csp::bridge

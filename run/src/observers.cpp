@@ -6,6 +6,13 @@ CsvLogObserver::CsvLogObserver(const std::string& path, const rt::Emulator& emul
   log_.write(emulator.state(), rt::CycleInfo{});   // the state the motion starts from
 }
 
+std::unique_ptr<CsvLogObserver> observe_csv_log(Run& run, const std::string& path) {
+  if (path.empty()) return nullptr;
+  auto log = std::make_unique<CsvLogObserver>(path, run.emulator());
+  run.observe(*log);
+  return log;
+}
+
 TrackingObserver::TrackingObserver(Reference reference, const rt::Emulator& emulator)
     : reference_(std::move(reference)), time_(emulator), tau_max_(emulator.settings().plant.joint_limits.tau_max) {}
 

@@ -11,6 +11,7 @@
 #include "csp/planners/profile.hpp"
 #include "csp/planners/task.hpp"
 #include "csp/run/observers.hpp"
+#include "csp/run/sources.hpp"
 
 namespace csp::run {
 namespace {
@@ -84,7 +85,8 @@ planners::EmulatorRun verify_plan(const PlanContext& c, const Scene& scene, cons
   run.observe(progress);
   run.observe(tracking);
   run.observe(clearance);
-  const RunResult result = run.run_builtin_controller();
+  ControllerSource controller(run);
+  run.run(controller);
 
   planners::EmulatorRun verified;
   verified.robot = robot_name(c.robot_file);
@@ -93,9 +95,9 @@ planners::EmulatorRun verify_plan(const PlanContext& c, const Scene& scene, cons
   verified.tracking_max = tracking.max_error();
   verified.peak_tau_J_fraction = tracking.peak_tau_J_fraction();
   verified.measured_clearance = clearance.closest();
-  if (result.reflex()) {
+  if (controller.reflex()) {
     for (int i = 0; i < rt::kNumErrors; ++i)
-      if (result.motion.errors.flags()[i]) verified.reflex.push_back(rt::error_name(static_cast<rt::Error>(i)));
+      if (controller.motion().errors.flags()[i]) verified.reflex.push_back(rt::error_name(static_cast<rt::Error>(i)));
     if (verified.reflex.empty()) verified.reflex.push_back(run.emulator().reflex_reason());
     verified.reflex_t = run.emulator().state().time.toSec();
   }

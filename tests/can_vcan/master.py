@@ -177,7 +177,8 @@ def profile(k):
 def session(csp, reference, work):
     master = Master()
     log = os.path.join(work, "session.lcmlog")
-    serve = boot(master, csp, work, "session", "--log", log)
+    csv, replayed_csv = os.path.join(work, "session.csv"), os.path.join(work, "session_replayed.csv")
+    serve = boot(master, csp, work, "session", "--log", log, "--csv", csv)
 
     master.send(0x000, [0x01, 0x00])                          # NMT start remote node, all nodes
     master.wait_for(lambda m: False, timeout=0.5)             # heartbeats (100 ms) show the new state
@@ -271,9 +272,13 @@ def session(csp, reference, work):
     text = stop_serve(serve, work, "session")
     check("motions 2" in text and "error recoveries 1" in text, "serve counted 2 motions and 1 error recovery")
 
-    replay = subprocess.run([csp, "replay", log], capture_output=True, text=True)
+    replay = subprocess.run([csp, "replay", log, "--csv", replayed_csv], capture_output=True, text=True)
     print(replay.stdout + replay.stderr, flush=True)
     check(replay.returncode == 0 and "bit for bit" in replay.stdout, "csp replay re-simulates the CAN session log bit for bit")
+    with open(csv) as served, open(replayed_csv) as replayed:
+        rows = served.read()
+        check(rows.count("\n") > 1000 and rows == replayed.read(),
+              "the --csv log of the served robot (%d lines) is the re-simulated run's, row for row" % rows.count("\n"))
 
 
 def badinput(csp, work):

@@ -22,10 +22,10 @@ constexpr int64_t kIdleAfterNs = 100'000'000;
 // One serve run: the sockets, the drives, the robot, the bus-load counters.
 class CanSession {
  public:
-  CanSession(const rt::Scenario& scenario, const CanServeOptions& options, rt::CycleDriver& driver)
+  CanSession(rt::Emulator& robot, const rt::Scenario& scenario, const CanServeOptions& options, rt::CycleDriver& driver)
       : options_(options),
         driver_(driver),
-        arm_(scenario, options.log_path,
+        arm_(robot, scenario, options.log_path,
              [this](const std::string& line) {
                if (!options_.quiet) std::cerr << "csp can serve: " << line << '\n';
              }),
@@ -76,12 +76,10 @@ class CanSession {
     mark_sync();
     for (std::size_t i = 0; i < sockets_.size(); ++i) send(i, sync);
     robot_cycle([&] { bus_.receive(sync); });
-    flush();
   }
 
   void cycle_without_sync() {
     robot_cycle([&] { bus_.cycle_without_sync(); });
-    flush();
   }
 
   // Waits up to `timeout_ns` for frames.
@@ -128,7 +126,8 @@ class CanSession {
 
   // One robot cycle (`run`: the bus's SYNC, or a cycle without one), counted by the driver: its
   // command is lost unless every enabled joint's RPDO came. The state's TPDOs go out at the SYNC:
-  // the round trip of a session's cycle runs from here to the last enabled joint's RPDO.
+  // the round trip of a session's cycle runs from here to the last enabled joint's RPDO. The run's
+  // observers see the cycle once its frames are sent.
   template <typename Run>
   void robot_cycle(const Run& run) {
     const uint64_t lost_before = bus_.counters().lost_cycles;
@@ -138,6 +137,9 @@ class CanSession {
     answered_ = false;
     timed_ = arm_.server().in_session();
     if (options_.clock == rt::Clock::kLockstep) bus_.elapse(1000);
+    flush();
+    const bridge::RobotServer& server = arm_.server();
+    if (options_.after_cycle) options_.after_cycle(server.emulator().state(), server.last_cycle());
   }
 
   void time_round_trip() {
@@ -249,11 +251,11 @@ std::vector<std::string> split_interfaces(const std::string& first, int split) {
 
 int interface_of_joint(int joint, int split) { return joint * split / kJoints; }
 
-CanServeReport serve(const rt::Scenario& scenario, const CanServeOptions& options) {
+CanServeReport serve(rt::Emulator& robot, const rt::Scenario& scenario, const CanServeOptions& options) {
   if (!(options.duration > 0.0) || !std::isfinite(options.duration)) throw std::invalid_argument("duration: expected a positive number of seconds");
   if (!(options.bitrate >= 1e3 && options.bitrate <= 1e7)) throw std::invalid_argument("--bitrate: expected 1000 to 10000000 bit/s");
   rt::CycleDriver driver(options.clock);
-  CanSession session(scenario, options, driver);
+  CanSession session(robot, scenario, options, driver);
   CanServeReport& report = session.report();
   const auto cycles = static_cast<uint64_t>(std::llround(options.duration / rt::kDeltaT));
   if (options.clock == rt::Clock::kRealtime) run_realtime(session, driver, cycles, options);

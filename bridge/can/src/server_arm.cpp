@@ -36,11 +36,12 @@ std::string enabled_modes(const ArmCommand& command) {
 
 }  // namespace
 
-ServerArm::ServerArm(const rt::Scenario& scenario, const std::string& log_path, bridge::RobotServer::Diagnostic diagnostic)
+ServerArm::ServerArm(rt::Emulator& robot, const rt::Scenario& scenario, const std::string& log_path,
+                     bridge::RobotServer::Diagnostic diagnostic)
     : log_(log_path.empty() ? nullptr : std::make_unique<bridge::LogWriter>(log_path)),
       diagnostic_(std::move(diagnostic)),
       server_(
-          scenario.emulator, channels_,
+          robot, channels_,
           [this](const std::string& channel, const std::vector<uint8_t>& bytes) {
             if (log_) log_->write(channel, bytes, bridge::now_utime());
           },

@@ -8,6 +8,8 @@
 
 #include "csp/bridge/messages.hpp"
 #include "csp/dynamics/progress.hpp"
+#include "csp/rt/control_loop.hpp"
+#include "csp/rt/scenario.hpp"
 
 namespace csp::bridge {
 
@@ -27,13 +29,35 @@ struct ResimulationReport {
   bool identical() const { return differing_states == 0 && damage.empty(); }
 };
 
-// Re-simulates a recording of a CSP session: a `csp serve --log` or `csp emulate --lcm-log` file,
-// or lcm-logger's recording of the bus (other channels and prefixes mixed in, begun late). The
-// scenario is the scenario file `scenario_path` if given, else the log's first CSP_SCENARIO record,
-// wherever it is; the channels are those of that record's prefix, or without a record those of the
-// first state channel (a name ending in CSP_STATE). Throws std::runtime_error if the log cannot be
-// read, has no scenario record and no `scenario_path` is given, or holds no robot state.
-// `progress`: MB of the log re-simulated.
+// A recording of a CSP session to re-simulate: a `csp serve --log`, `csp can serve --log` or
+// `csp emulate --lcm-log` file, or lcm-logger's recording of the bus (other channels and prefixes
+// mixed in, begun late). The scenario is the scenario file `scenario_path` if given, else the log's
+// first CSP_SCENARIO record, wherever it is; the channels are those of that record's prefix, or
+// without a record those of the first state channel (a name ending in CSP_STATE). Throws
+// std::runtime_error if the log cannot be read, has no scenario record and no `scenario_path` is
+// given, or holds no robot state channel.
+struct Recording {
+  Recording(const std::string& log_path, const std::string& scenario_path = "");
+
+  std::string log_path;
+  rt::Scenario scenario;          // the robot to re-simulate it on
+  std::string scenario_origin;    // ResimulationReport::scenario
+  Channels channels;
+  std::string missing;            // what the log misses before it is read through (no record)
+  bool has_config_replies = false;   // a recording of the server's side (not csp emulate's)
+};
+
+struct ResimulationOptions {
+  rt::CycleObserver after_cycle;             // after each re-simulated cycle (may be empty)
+  const std::atomic<bool>* stop = nullptr;   // set to end the re-simulation where it is
+  Progress progress;                         // MB of the log re-simulated
+};
+
+// Feeds the recording's commands and requests to `robot` (the run's, built from
+// recording.scenario) cycle by cycle and compares each recorded state with the re-simulated one.
+// run::LogReplaySource is the front end.
+ResimulationReport resimulate(const Recording& recording, rt::Emulator& robot, const ResimulationOptions& options);
+// The same on a robot of its own.
 ResimulationReport resimulate(const std::string& log_path, const std::string& scenario_path = "",
                               const Progress& progress = {});
 

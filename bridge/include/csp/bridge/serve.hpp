@@ -22,6 +22,7 @@ struct ServeOptions {
   bool wait_for_controller = false;     // lockstep: hold the first cycle until a session starts
   const std::atomic<bool>* stop = nullptr;   // set (e.g. by SIGINT) to end the run cleanly
   bool quiet = false;                   // no diagnostic lines on stderr
+  rt::CycleObserver after_cycle;        // after each robot cycle, once its state is published (may be empty)
 };
 
 struct ServeReport {
@@ -34,8 +35,8 @@ struct ServeReport {
   std::string last_reflex;
 };
 
-// Runs `scenario`'s robot for options.duration; throws std::runtime_error if LCM or the log
-// cannot be opened.
-ServeReport serve(const rt::Scenario& scenario, const ServeOptions& options);
+// Serves `robot` (the run's emulated robot, of `scenario`) for options.duration; throws
+// std::runtime_error if LCM or the log cannot be opened. run::LcmBusSource is the front end.
+ServeReport serve(rt::Emulator& robot, const rt::Scenario& scenario, const ServeOptions& options);
 
 }  // namespace csp::bridge

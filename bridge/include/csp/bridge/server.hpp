@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "csp/bridge/messages.hpp"
+#include "csp/rt/control_loop.hpp"
 
 namespace csp::bridge {
 
@@ -39,7 +40,8 @@ class RobotServer {
   // One line per notable event (rejections are rate-limited).
   using Diagnostic = std::function<void(const std::string& line)>;
 
-  RobotServer(const rt::EmulatorSettings& settings, const Channels& channels, Send send, Diagnostic diagnostic);
+  // `robot` is the run's emulated robot (run::Run owns it); the server steps it.
+  RobotServer(rt::Emulator& robot, const Channels& channels, Send send, Diagnostic diagnostic);
 
   int64_t message_id() const { return static_cast<int64_t>(emulator_.state().time.toMSec()); }
   robot_state_t state_message(int64_t utime) const;
@@ -55,6 +57,8 @@ class RobotServer {
   bool answered() const { return command_.has_value(); }   // this cycle's command arrived
   // Ends the cycle: steps the emulator with the command that answered the state, or none.
   void step(int64_t utime);
+  // What the last step applied (a run's observers see it with the state it produced).
+  rt::CycleInfo last_cycle() const;
 
   const rt::Emulator& emulator() const { return emulator_; }
   const ServerCounters& counters() const { return counters_; }
@@ -65,7 +69,7 @@ class RobotServer {
   bool accepted(Rejection rejection, const std::string& where);
   void event(const std::string& text, int64_t utime);
 
-  rt::Emulator emulator_;
+  rt::Emulator& emulator_;
   Channels channels_;
   Send send_;
   Diagnostic diagnostic_;
@@ -73,6 +77,7 @@ class RobotServer {
   std::optional<rt::ControlMode> session_;
   std::optional<rt::Command> command_;   // the answer to the current state
   bool command_received_ = false;        // the previous step applied a command
+  rt::Command applied_;                  // and this one
 };
 
 }  // namespace csp::bridge

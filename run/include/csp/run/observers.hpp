@@ -36,11 +36,15 @@ class CsvLogObserver : public Observer {
   rt::CsvLog log_;
 };
 
-// The run as an LCM log (csp replay, csp log export, lcm-spy).
+// The CSV log at `path` observing `run` from now on; none for an empty path (a command's option).
+std::unique_ptr<CsvLogObserver> observe_csv_log(Run& run, const std::string& path);
+
+// A run of the built-in controller as an LCM log (csp replay, csp log export, lcm-spy); `mode`:
+// the controller's. (A serve run logs what crosses its bus: bridge/serve.hpp, can/serve.hpp.)
 class LcmLogObserver : public Observer {
  public:
-  LcmLogObserver(const std::string& path, const Run& run)
-      : recorder_(path, run.scenario(), run.emulator(), run.controller().mode) {}
+  LcmLogObserver(const std::string& path, const Run& run, rt::ControlMode mode)
+      : recorder_(path, run.scenario(), run.emulator(), mode) {}
   void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override { recorder_.record(state, cycle); }
   uint64_t events() const { return recorder_.log().events(); }
 
@@ -76,11 +80,12 @@ class TrackingObserver : public Observer {
 // The scenario's own trajectory from the pose the run starts in: what its built-in controller tracks.
 TrackingObserver::Reference scenario_reference(const rt::Scenario& scenario, const rt::Emulator& emulator);
 
-// A scene's task: the medical metrics (docs/medical.md).
+// A scene's task: the medical metrics (docs/medical.md). `status`: what the built-in medical
+// controller found (may be null).
 class MedicalObserver : public Observer {
  public:
-  explicit MedicalObserver(const Run& run)
-      : recorder_(run.scenario(), run.emulator(), run.controller().status), time_(run.emulator()) {}
+  MedicalObserver(const Run& run, std::shared_ptr<const rt::MedicalStatus> status)
+      : recorder_(run.scenario(), run.emulator(), std::move(status)), time_(run.emulator()) {}
   void on_cycle(const rt::RobotState& state, const rt::CycleInfo&) override { recorder_.add(state, time_.of(state)); }
   const rt::MedicalRecorder& recorder() const { return recorder_; }
 

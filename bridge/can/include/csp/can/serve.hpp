@@ -32,6 +32,7 @@ struct CanServeOptions {
   double duration = 10.0;            // robot time to serve [s]
   const std::atomic<bool>* stop = nullptr;
   bool quiet = false;
+  rt::CycleObserver after_cycle;     // after each robot cycle, once its TPDOs are sent (may be empty)
 };
 
 struct InterfaceReport {
@@ -60,8 +61,9 @@ struct CanServeReport {
 std::vector<std::string> split_interfaces(const std::string& first, int split);
 int interface_of_joint(int joint, int split);   // joint 0..6 -> 0..split-1
 
+// Serves `robot` (the run's emulated robot, of `scenario`); run::CanBusSource is the front end.
 // Throws std::runtime_error when an interface cannot be opened or the log cannot be written,
 // std::invalid_argument on bad options.
-CanServeReport serve(const rt::Scenario& scenario, const CanServeOptions& options);
+CanServeReport serve(rt::Emulator& robot, const rt::Scenario& scenario, const CanServeOptions& options);
 
 }  // namespace csp::can

@@ -36,8 +36,10 @@ struct ServerArmCounters {
 
 class ServerArm : public Arm {
  public:
-  // `log_path` empty: no session log. `diagnostic` gets the server's notable events.
-  ServerArm(const rt::Scenario& scenario, const std::string& log_path, bridge::RobotServer::Diagnostic diagnostic);
+  // `robot`: the run's emulated robot, of `scenario`. `log_path` empty: no session log.
+  // `diagnostic` gets the server's notable events.
+  ServerArm(rt::Emulator& robot, const rt::Scenario& scenario, const std::string& log_path,
+            bridge::RobotServer::Diagnostic diagnostic);
 
   ArmState cycle(const ArmCommand& command) override;
   ArmState measured() const override;
