@@ -1,22 +1,19 @@
 // csp gap: diagnose the sim-to-real gap of a joint log (docs/gap.md): where the simulator model
 // misses, which unmodelled effect is responsible, how far the held-out gap shrinks once it is added.
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
-#include <sstream>
 
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
-#include "csp/bridge/csv_convert.hpp"
-#include "csp/bridge/lcm_log.hpp"
 #include "csp/gap/idle.hpp"
 #include "csp/gap/report.hpp"
 #include "csp/io/svg_plot.hpp"
+#include "csp/run/session_log.hpp"
 
 namespace csp::cli {
 namespace {
@@ -33,49 +30,29 @@ struct GapArguments {
   bool robot_given = false, ee_given = false;   // on the command line (else a session log's recorded ones)
 };
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // The simulator model. For the log of a CSP session (an LCM log with the robot's scenario record)
 // the robot file and end effector are the ones the robot ran with, unless given on the command line.
 Model build_model(const GapArguments& args) {
-  if (!bridge::is_lcm_log(args.log)) return args.model.build();
-  const std::vector<scenario_t> records = bridge::outline(args.log).scenario_records;
-  const auto record = std::find_if(records.begin(), records.end(), [&](const scenario_t& r) {
-    return bridge::Channels(r.channel_prefix).state == args.channel;
-  });
-  if (record == records.end()) return args.model.build();
-  const bridge::RecordedRobot recorded(*record);
+  const run::SessionRobot robot = run::session_robot(
+      args.log, args.channel, {args.model.robot, args.model.end_effector, args.robot_given, args.ee_given});
+  if (!robot.used.empty()) std::cerr << "csp gap: " << args.log << ": " << robot.used << "\n";
+  for (const std::string& note : robot.notes) std::cerr << "csp gap: " << args.log << ": " << note << "\n";
   ModelArguments model = args.model;
-  std::vector<std::string> notes;
-  if (!args.robot_given) model.robot = recorded.robot_file;
-  else if (read_text(args.model.robot) != record->robot_text)
-    notes.push_back("--robot " + args.model.robot + " differs from the robot file it recorded (" + recorded.recorded_path + ")");
-  if (!args.ee_given) model.end_effector = recorded.end_effector;
-  else if (args.model.end_effector != recorded.end_effector)
-    notes.push_back("--ee " + args.model.end_effector + " differs from the end effector it recorded (" + recorded.end_effector + ")");
-  if (recorded.scene_tool) notes.push_back("its scenario's scene mounts a tool, which is not taken (give it as --load-*)");
-  std::cerr << "csp gap: " << args.log << ": the robot's recorded scenario " << record->path << ": "
-            << (args.robot_given ? "--robot " + args.model.robot : "its robot file " + recorded.recorded_path)
-            << (args.ee_given ? ", --ee " : ", its end effector ") << model.end_effector << "\n";
-  for (const std::string& note : notes) std::cerr << "csp gap: " << args.log << ": " << note << "\n";
+  model.robot = robot.robot_file;
+  model.end_effector = robot.end_effector;
   try {
     return model.build();
   } catch (const ConfigError& e) {
-    if (args.robot_given) throw;
-    throw ConfigError("the robot file recorded in " + args.log + " (" + recorded.recorded_path + ") cannot be used: " + e.what() +
-                      "; give --robot");
+    if (!robot.robot_file_recorded) throw;
+    throw ConfigError("the robot file recorded in " + args.log + " (" + robot.recorded->recorded_path + ") cannot be used: " +
+                      e.what() + "; give --robot");
   }
 }
 
 // A CSV joint log, or the robot states of an LCM log: told apart by content, not by name. Its idle
 // stretches are left out (and said so) unless --keep-idle.
 JointLog read_log(const std::string& path, const GapArguments& args, const gap::FilterOptions& filter) {
-  const JointLog log = bridge::is_lcm_log(path) ? bridge::read_joint_log_lcm(path, args.channel) : read_joint_log_csv(path);
+  const JointLog log = run::read_joint_log(path, args.channel);
   if (args.keep_idle) return log;
   gap::IdleTrim trim = gap::leave_out_idle(log, filter);
   if (trim.stretches > 0) {

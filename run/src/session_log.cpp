@@ -1,0 +1,57 @@
+#include "csp/run/session_log.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "csp/bridge/csv_convert.hpp"
+
+namespace csp::run {
+namespace {
+
+// A given robot file's text, empty if it cannot be read: it then differs from the recording, and
+// building the model from it names the file and what is wrong with it.
+std::string text_or_empty(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+SessionRobot session_robot(const std::string& log_path, const std::string& state_channel, const GivenRobot& given) {
+  SessionRobot robot;
+  robot.robot_file = given.robot_file;
+  robot.end_effector = given.end_effector;
+  if (!bridge::is_lcm_log(log_path)) return robot;
+  const std::vector<scenario_t> records = bridge::outline(log_path).scenario_records;
+  const auto record = std::find_if(records.begin(), records.end(), [&](const scenario_t& r) {
+    return bridge::Channels(r.channel_prefix).state == state_channel;
+  });
+  if (record == records.end()) return robot;
+
+  robot.recorded = std::make_unique<bridge::RecordedRobot>(*record);
+  const bridge::RecordedRobot& recorded = *robot.recorded;
+  robot.recorded_scenario = record->path;
+  if (!given.robot_file_given) {
+    robot.robot_file = recorded.robot_file;
+    robot.robot_file_recorded = true;
+  } else if (text_or_empty(given.robot_file) != record->robot_text) {
+    robot.notes.push_back("--robot " + given.robot_file + " differs from the robot file it recorded (" + recorded.recorded_path + ")");
+  }
+  if (!given.end_effector_given) robot.end_effector = recorded.end_effector;
+  else if (given.end_effector != recorded.end_effector)
+    robot.notes.push_back("--ee " + given.end_effector + " differs from the end effector it recorded (" + recorded.end_effector + ")");
+  if (recorded.scene_tool) robot.notes.push_back("its scenario's scene mounts a tool, which is not taken (give it as --load-*)");
+  robot.used = "the robot's recorded scenario " + record->path + ": " +
+               (given.robot_file_given ? "--robot " + given.robot_file : "its robot file " + recorded.recorded_path) +
+               (given.end_effector_given ? ", --ee " : ", its end effector ") + robot.end_effector;
+  return robot;
+}
+
+JointLog read_joint_log(const std::string& path, const std::string& state_channel) {
+  return bridge::is_lcm_log(path) ? bridge::read_joint_log_lcm(path, state_channel) : read_joint_log_csv(path);
+}
+
+}  // namespace csp::run
