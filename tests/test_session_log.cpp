@@ -8,6 +8,7 @@
 
 #include "bridge_support.hpp"
 #include "csp/run/observers.hpp"
+#include "csp/run/sources.hpp"
 #include "csp/run/session_log.hpp"
 #include "support.hpp"
 
@@ -23,11 +24,12 @@ rt::Scenario record_run(const std::string& lcm_log, const std::string& csv_log) 
   rt::Scenario scenario = rt::load_scenario(test::kDefaultScenario);
   scenario.duration = 0.2;
   Run run(scenario);
-  LcmLogObserver lcm(lcm_log, run);
+  ControllerSource controller(run);
+  LcmLogObserver lcm(lcm_log, run, controller.controller().mode);
   CsvLogObserver csv(csv_log, run.emulator());
   run.observe(lcm);
   run.observe(csv);
-  EXPECT_TRUE(run.run_builtin_controller().observer_failure.empty());
+  EXPECT_TRUE(run.run(controller).observer_failure.empty());
   return scenario;
 }
 
