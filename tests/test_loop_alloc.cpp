@@ -137,9 +137,7 @@ TEST(LoopAllocation, RealtimeMotionAllocatesNothing) {
   for (int attempt = 1; attempt <= 5; ++attempt) {
     const Counted counted = run_counted(scenario, rt::Clock::kRealtime);
     if (counted.reflex) continue;
-    // At least the 200 cycles of its duration: under load a late command is lost, the finishing one
-    // included, and the motion then ends a cycle or two after them.
-    EXPECT_GE(counted.cycles, 200u);
+    EXPECT_EQ(counted.cycles, 200u);
     EXPECT_EQ(counted.after_warm_up, 0u);
     return;
   }
