@@ -160,9 +160,9 @@ bool plants_own(const std::string& cause) { return cause == "static_friction" ||
 
 // --- the plant key -------------------------------------------------------------------------------
 
-std::string scenario_with_plant(const std::string& name, const std::string& plant) {
+std::string scenario_with_plant(const std::string& name, const std::string& plant, const std::string& robot = "panda") {
   const std::string path = (temp_dir() / name).string();
-  std::ofstream(path) << "name: link scale\nrobot: " << robot_file("panda") << "\nplant:\n" << plant
+  std::ofstream(path) << "name: plant\nrobot: " << robot_file(robot) << "\nplant:\n" << plant
                       << "initial_q: [0, -0.785, 0, -2.356, 0, 1.571, 0.785]\nduration: 1\n"
                          "controller: {type: float}\n";
   return path;
@@ -220,6 +220,41 @@ TEST(ScenarioLinkScale, BadValuesNameTheKey) {
            {"  link_scale: {4: {inertia: 1.1}}\n", "plant.link_scale.4.inertia: expected no such key (allowed: mass)"},
            {"  link_scale: {4: {}}\n", "plant.link_scale.4.mass: expected this key (missing)"},
            {"  link_scale: [1.1]\n", "plant.link_scale: expected a mapping"}}) {
+    const std::string error = scenario_error(plant);
+    EXPECT_NE(error.find(expected), std::string::npos) << plant << " -> " << error;
+  }
+}
+
+// The plant carries the robot file's armature (an FR3's motors) unless the scenario names its own;
+// the robot's own model has none. M of the plant is then the model's M plus diag(armature).
+TEST(ScenarioArmature, TheRobotFilesUnlessTheScenarioNamesAnother) {
+  const Vector7 fr3_armature =
+      v7(franka_models().at("dynamics").at("fr3_mujoco_menagerie").at("joint_params").at("armature"));
+  const rt::Scenario shipped = rt::load_scenario(rt::shipped_scenario_path("libfranka_fr3"));
+  EXPECT_EQ(shipped.emulator.plant.armature, fr3_armature);
+  EXPECT_EQ(shipped.emulator.internal.armature, Vector7::Zero());
+  const Vector7 q(0.3, -0.5, 0.2, -2.0, 0.4, 1.8, -0.6);
+  const Matrix7 added = mass_of(Model(shipped.emulator.plant), q) - mass_of(Model(shipped.emulator.internal), q);
+  EXPECT_TRUE(near(added, Matrix7(fr3_armature.asDiagonal()), 1e-12)) << added;
+
+  EXPECT_EQ(rt::load_scenario(scenario_with_plant("fr3.yaml", "  inertia: franka_description\n", "fr3")).emulator.plant.armature,
+            fr3_armature);
+  const std::string rigid = "  armature: {values: [0, 0, 0, 0, 0, 0, 0], source: \"no motors\"}\n";
+  EXPECT_EQ(rt::load_scenario(scenario_with_plant("fr3_rigid.yaml", rigid, "fr3")).emulator.plant.armature, Vector7::Zero());
+  EXPECT_EQ(rt::load_scenario(scenario_with_plant("panda.yaml", "  inertia: gaz2019\n")).emulator.plant.armature,
+            Vector7::Zero());
+  const std::string own = "  armature: {values: [0.4, 0.4, 0.3, 0.3, 0.1, 0.1, 0.05], source: \"a test\"}\n";
+  EXPECT_EQ(rt::load_scenario(scenario_with_plant("panda_armature.yaml", own)).emulator.plant.armature,
+            (Vector7() << 0.4, 0.4, 0.3, 0.3, 0.1, 0.1, 0.05).finished());
+}
+
+TEST(ScenarioArmature, BadValuesNameTheKey) {
+  for (const auto& [plant, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"  armature: {values: [0, 0, 0, -1, 0, 0, 0], source: x}\n", "plant.armature.values: expected 7 non-negative numbers"},
+           {"  armature: {values: [0, 0, 0], source: x}\n", "plant.armature.values: expected a list of 7 numbers"},
+           {"  armature: {values: [0, 0, 0, 0, 0, 0, 0]}\n", "plant.armature.source: expected this key (missing)"},
+           {"  armature: {values: [0, 0, 0, 1e9, 0, 0, 0], source: x}\n", "plant.armature.values: expected 7 rotor inertias of at most 1000 kg m^2"},
+           {"  armature: [0, 0, 0, 0, 0, 0, 0]\n", "plant.armature: expected a mapping"}}) {
     const std::string error = scenario_error(plant);
     EXPECT_NE(error.find(expected), std::string::npos) << plant << " -> " << error;
   }

@@ -208,6 +208,9 @@ TEST(ConfigData, PandaFileCarriesTheDataFileNumbers) {
     const json& c = linear.at(column);
     expect_linear(config.friction_sets.at(set), v7(c.at("f_v")), v7(c.at("f_c")), v7(c.at("f_o")));
   }
+  // No armature: the data file's only Panda value is a simulator's class default, not identified.
+  EXPECT_EQ(config.armature.values, Vector7::Zero());
+  EXPECT_EQ(config.armature.source, "");
 }
 
 TEST(ConfigData, Fr3FileCarriesTheDataFileNumbers) {
@@ -265,6 +268,11 @@ TEST(ConfigData, Fr3FileCarriesTheDataFileNumbers) {
   // MuJoCo damping -> viscous, frictionloss -> coulomb, no offset.
   expect_linear(config.friction_sets.at("mujoco_menagerie"), v7(joint_params.at("damping")),
                 v7(joint_params.at("frictionloss")), Vector7::Zero());
+  // The motors' armature, with its source.
+  EXPECT_TRUE(same(config.armature.values, v7(joint_params.at("armature"))));
+  EXPECT_NE(config.armature.source.find("mujoco_menagerie franka_fr3/fr3.xml"), std::string::npos) << config.armature.source;
+  // A model has none unless its caller adds the robot file's (the plant's is the scenario's to take).
+  EXPECT_EQ(model_parameters(config, {}).armature, Vector7::Zero());
 }
 
 // The defaults build a model with exactly these sets, and "none" is always available.
@@ -795,6 +803,25 @@ TEST(ConfigValidation, StaticFrictionValues) {
   options.friction = "gaz2019";
   const Vector7 breakaway = model_parameters(load_robot_config(robot_file("panda")), options).friction.breakaway;
   EXPECT_EQ(breakaway, (Vector7() << 0.245, 0.1523, 0.1827, 0.3591, 0.2669, 0.1658, 0.2109).finished());
+}
+
+TEST(ConfigValidation, ArmatureValues) {
+  auto with = [](const std::string& armature) { return Edit{"name: panda\n", "name: panda\narmature: " + armature + "\n"}; };
+  expect_rejected({with("{values: [0.1, 0.1, 0.1, -0.1, 0.1, 0.1, 0.1], source: x}")},
+                  {"armature.values: expected 7 non-negative numbers"}, "negative_armature.yaml");
+  expect_rejected({with("{values: [0.1, 0.1, 0.1], source: x}")}, {"armature.values: expected a list of 7 numbers"},
+                  "short_armature.yaml");
+  expect_rejected({with("{values: [0.1, 0.1, 0.1, .nan, 0.1, 0.1, 0.1], source: x}")},
+                  {"armature.values[3]: expected a finite number"}, "nan_armature.yaml");
+  expect_rejected({with("{values: [0.1, 0.1, 0.1, 1e200, 0.1, 0.1, 0.1], source: x}")},
+                  {"armature.values: expected 7 rotor inertias of at most 1000 kg m^2"}, "huge_armature.yaml");
+  expect_rejected({with("{values: [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1]}")}, {"armature.source: expected this key (missing)"},
+                  "armature_without_source.yaml");
+  expect_rejected({with("{values: [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1], source: x, joints: 7}")},
+                  {"armature.joints: expected no such key"}, "armature_unknown_key.yaml");
+  // What loads is what the file says.
+  const std::string path = write_temp("armature.yaml", edited_panda({with("{values: [0.4, 0.4, 0.3, 0.3, 0.1, 0.1, 0.05], source: x}")}));
+  EXPECT_EQ(load_robot_config(path).armature.values, (Vector7() << 0.4, 0.4, 0.3, 0.3, 0.1, 0.1, 0.05).finished());
 }
 
 TEST(ConfigValidation, UnreadableFile) {

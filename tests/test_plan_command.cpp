@@ -38,15 +38,11 @@ constexpr double kDt = 0.001;
 
 std::string scene_file(const std::string& name) { return std::string(CSP_SOURCE_DIR) + "/configs/scenes/" + name + ".yaml"; }
 
-// FR3's plant carries its motors' armature, as the shipped FR3 scenario's (the plan's scenario too).
-planners::Armature armature_of(const std::string& robot) {
-  if (robot != "fr3") return {};
-  return {rt::load_scenario(rt::shipped_scenario_path("libfranka_fr3")).emulator.plant.armature, "libfranka_fr3.yaml"};
-}
-
+// The plan's arm: the robot file's sets, the scene's tool, its motors' armature (an FR3's).
 Model scene_model(const std::string& robot, const Scene& scene) {
-  ModelParameters parameters = with_tool(model_parameters(load_robot_config(robot_file(robot)), {}), scene.tool);
-  parameters.armature = armature_of(robot).values;
+  const RobotConfig config = load_robot_config(robot_file(robot));
+  ModelParameters parameters = with_tool(model_parameters(config, {}), scene.tool);
+  parameters.armature = config.armature.values;
   return Model(parameters);
 }
 
@@ -399,7 +395,7 @@ TEST(ScenarioTrajectoryFile, TheEmulatorTracksTheFileAndHoldsItsEnd) {
   const JointLog trajectory = small_excitation(model, scene.pose("ready").q, 4.0);
   const std::string dir = (temp_dir() / "scenario_file").string();
   planners::write_plan_files(dir, {"excite", "ultrasound_abdomen", "panda", 1, {}}, planners::versions("none"),
-                             robot_file("panda"), {}, scene, trajectory, nlohmann::json::object());
+                             robot_file("panda"), scene, trajectory, nlohmann::json::object());
   rt::Scenario scenario = rt::load_scenario(dir + "/scenario.yaml");
   EXPECT_DOUBLE_EQ(scenario.duration, 4.0 + planners::kScenarioHold);
   rt::Emulator emulator(scenario.emulator);
@@ -435,7 +431,7 @@ TEST(ScenarioTrajectoryFile, BadReferencesAreTheScenariosErrors) {
   const Model model = scene_model("panda", scene);
   const std::string dir = (temp_dir() / "scenario_errors").string();
   planners::write_plan_files(dir, {"excite", "ultrasound_abdomen", "panda", 1, {}}, planners::versions("none"),
-                             robot_file("panda"), {}, scene, small_excitation(model, scene.pose("ready").q, 2.0),
+                             robot_file("panda"), scene, small_excitation(model, scene.pose("ready").q, 2.0),
                              nlohmann::json::object());
   const std::string good = read_text(dir + "/scenario.yaml");
   auto error_of = [&](const std::string& from, const std::string& to) {
@@ -468,8 +464,14 @@ TEST(PlanFiles, TheWrittenScenarioRunsUnderCspEmulateOnPandaAndFr3) {
     const Model model = scene_model(robot, scene);
     const std::string dir = (temp_dir() / ("emulate_" + robot)).string();
     planners::write_plan_files(dir, {"excite", "ultrasound_abdomen", robot, 1, {}}, planners::versions("none"),
-                               robot_file(robot), armature_of(robot), scene, small_excitation(model, scene.pose("ready").q, 3.0),
+                               robot_file(robot), scene, small_excitation(model, scene.pose("ready").q, 3.0),
                                nlohmann::json::object());
+    // Its plant has the robot file's armature (robot.yaml): the data file's for an FR3, none for a Panda.
+    const Vector7 armature = rt::load_scenario(dir + "/scenario.yaml").emulator.plant.armature;
+    if (robot == "fr3")
+      EXPECT_EQ(armature, v7(franka_models().at("dynamics").at("fr3_mujoco_menagerie").at("joint_params").at("armature")));
+    else
+      EXPECT_EQ(armature, Vector7::Zero());
     const ProgramRun run = run_csp({"emulate", dir + "/scenario.yaml"});
     EXPECT_EQ(run.exit_code, 0) << robot << "\n" << run.out << run.err;
     EXPECT_NE(run.out.find("finished without reflex"), std::string::npos) << run.out;
@@ -482,7 +484,7 @@ TEST(PlanFiles, PlanYamlRecordsTheRequestAndReadsBack) {
   const std::string dir = (temp_dir() / "plan_yaml").string();
   const planners::PlanRequest request{"excite", "mis_rcm", "fr3", 42, {{"harmonics", "5"}, {"criterion", "task"}}};
   nlohmann::json made = {{"coefficients", {{0.1, 1e-17, -3.0}, {2.5, 0.0, 1.0 / 3.0}}}, {"anchor", "port_hover"}};
-  planners::write_plan_files(dir, request, planners::versions("1.5.2"), robot_file("fr3"), armature_of("fr3"), scene,
+  planners::write_plan_files(dir, request, planners::versions("1.5.2"), robot_file("fr3"), scene,
                              small_excitation(model, scene.pose("ready").q, 1.0), made);
   const planners::PlanRequest read = planners::read_plan_request(dir + "/plan.yaml");
   EXPECT_EQ(read.command, "excite");

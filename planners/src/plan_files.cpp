@@ -64,14 +64,13 @@ std::string exact_number(double value) {
 
 Versions versions(const std::string& ompl_version) { return {CSP_VERSION, ompl_version}; }
 
-std::string scenario_text(const std::string& title, const Vector7& initial_q, double duration, const Tool& tool,
-                          const Armature& armature) {
+std::string scenario_text(const std::string& title, const Vector7& initial_q, double duration, const Tool& tool) {
   const RigidBodyInertia& m = tool.inertia;
   const double inertia[6] = {m.inertia(0, 0), m.inertia(0, 1), m.inertia(0, 2),
                              m.inertia(1, 1), m.inertia(1, 2), m.inertia(2, 2)};
   std::string s;
   s += "# Written by csp plan (docs/planning.md): `csp emulate scenario.yaml` runs the plan's trajectory.csv\n";
-  s += "# on the emulated robot (robot.yaml, the robot file's default sets), the scene's tool as the flange load,\n";
+  s += "# on the emulated robot (robot.yaml, the robot file's default sets and armature), the scene's tool as the flange load,\n";
   s += "# with joint impedance (libfranka's joint_impedance_control gains) and model feed-forward.\n";
   s += "name: " + nlohmann::json(title).dump() + "\n";
   s += "robot: robot.yaml\n";
@@ -79,9 +78,6 @@ std::string scenario_text(const std::string& title, const Vector7& initial_q, do
   s += "plant:\n";
   s += "  load: {mass: " + exact_number(m.mass) + ", com: " + vector_text(m.com.data(), 3) +
        ", inertia: " + vector_text(inertia, 6) + "}   # " + nlohmann::json(tool.name).dump() + "\n";
-  if (!armature.values.isZero())
-    s += "  armature: {values: " + vector_text(armature.values.data(), kNumJoints) +
-         ", source: " + nlohmann::json(armature.source).dump() + "}\n";
   s += "initial_q: " + vector_text(initial_q.data(), kNumJoints) + "\n";
   s += "duration: " + exact_number(duration) + "\n";
   s += "clock: lockstep\n";
@@ -96,7 +92,7 @@ std::string scenario_text(const std::string& title, const Vector7& initial_q, do
 }
 
 void write_plan_files(const std::string& dir, const PlanRequest& request, const Versions& versions,
-                      const std::string& robot_file, const Armature& armature, const Scene& scene,
+                      const std::string& robot_file, const Scene& scene,
                       const JointLog& trajectory, const nlohmann::json& made) {
   namespace fs = std::filesystem;
   std::error_code error;
@@ -114,7 +110,7 @@ void write_plan_files(const std::string& dir, const PlanRequest& request, const 
   const double duration = trajectory.t.back() - trajectory.t.front() + kScenarioHold;
   write_text_file((folder / "scenario.yaml").string(),
                   scenario_text("csp plan " + request.command + " " + scene.name, trajectory.q.front(), duration,
-                                scene.tool, armature));
+                                scene.tool));
 
   nlohmann::json options = nlohmann::json::object();
   std::string plan = "# Written by csp plan (docs/planning.md): `csp plan rebuild plan.yaml` makes the same files.\n";

@@ -20,12 +20,6 @@ constexpr double kTrajectoryStartTolerance = 1e-6;
 // paths are on the task within 1e-8 (docs/planning-task-paths.md), its tests hold them to 1e-4 and 1e-3.
 constexpr double kScanPathStartTolerance = 1e-4, kScanPathAxisTolerance = 1e-3;
 
-Vector7 non_negative7(const Field& f) {
-  const Vector7 v = f.vector<7>();
-  if ((v.array() < 0.0).any()) f.fail("7 non-negative numbers");
-  return v;
-}
-
 Vector6 non_negative6(const Field& f) {
   const Vector6 v = f.vector<6>();
   if ((v.array() < 0.0).any()) f.fail("6 non-negative numbers");
@@ -420,12 +414,8 @@ Scenario load_scenario(const std::string& path) {
   s.emulator.plant = build_model(config, plant_options, plant);
   if (!s.emulator.plant.physically_consistent) plant["inertia"].fail("a physically consistent inertial set for the plant");
   if (plant.has("link_scale")) scale_links(plant["link_scale"], s.emulator.plant);
-  if (plant.has("armature")) {
-    const Field a = plant["armature"];
-    a.allow_only({"values", "source"});
-    a["source"].text();   // every number carries its source
-    s.emulator.plant.armature = non_negative7(a["values"]);
-  }
+  // The robot file's armature unless the scenario names another (every number carries its source).
+  s.emulator.plant.armature = (plant.has("armature") ? read_armature(plant["armature"]) : config.armature).values;
 
   // The robot's own model: the plant's sets unless named; it is told the plant's load unless told otherwise.
   ModelOptions internal_options = plant_options;

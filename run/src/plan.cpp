@@ -120,8 +120,8 @@ PlanOutcome finish_plan(const PlanContext& c, Planned planned) {
   report.robot_name = robot_name(c.robot_file);
   report.plan = planned.made;
   report.singular_values = planned.singular_values;
-  planners::write_plan_files(job.out, job.request, planners::versions(planners::ompl_version()), c.robot_file,
-                             robot_armature(c.robot_file), c.scene, planned.trajectory, planned.made);
+  planners::write_plan_files(job.out, job.request, planners::versions(planners::ompl_version()), c.robot_file, c.scene,
+                             planned.trajectory, planned.made);
   csp::report(job.progress, "checking the trajectory", 0, 0);
   report.check = planners::check_trajectory(planned.trajectory, c.model, check_scene);
   if (job.verify) report.verify = verify_plan(c, check_scene, planned.trajectory);
@@ -245,18 +245,10 @@ std::string scene_file(const std::string& scene) {
   return scene;
 }
 
-// A real FR3's motors add their rotor inertia to the joints; the shipped FR3 scenario carries it
-// (configs/scenarios/libfranka_fr3.yaml, with its source), and so do the plans for an FR3.
-planners::Armature robot_armature(const std::string& robot_file) {
-  if (robot_name(robot_file) != "fr3") return {};
-  const std::string source = rt::shipped_scenario_path("libfranka_fr3");
-  return {rt::load_scenario(source).emulator.plant.armature,
-          "as configs/scenarios/libfranka_fr3.yaml: MuJoCo Menagerie franka_fr3 (identified in torque control)"};
-}
-
 Model scene_model(const std::string& robot_file, const Scene& scene) {
-  ModelParameters parameters = with_tool(model_parameters(load_robot_config(robot_file), {}), scene.tool);
-  parameters.armature = robot_armature(robot_file).values;
+  const RobotConfig config = load_robot_config(robot_file);
+  ModelParameters parameters = with_tool(model_parameters(config, {}), scene.tool);
+  parameters.armature = config.armature.values;   // the plan's scenario's plant has it (robot.yaml)
   return Model(parameters);
 }
 

@@ -193,6 +193,13 @@ RigidBodyInertia flange_load(const Field& field) {
   return body;
 }
 
+Armature read_armature(const Field& field) {
+  field.allow_only({"values", "source"});
+  const Vector7 values = non_negative7(field["values"]);
+  if (values.maxCoeff() > kMaxInertia) field["values"].fail("7 rotor inertias of at most 1000 kg m^2");
+  return {values, field["source"].text()};
+}
+
 namespace {
 
 // yaml-cpp keeps every pair of a mapping but looks keys up by their first occurrence, so a key
@@ -274,7 +281,7 @@ YAML::Node load_yaml_file(const std::string& path, const std::string& what) {
 RobotConfig load_robot_config(const std::string& path) {
   const YAML::Node root = load_yaml_file(path, "robot file");
   const Field top(root, path, "");
-  top.allow_only({"name", "kinematics", "end_effectors", "limits", "inertia", "friction"});
+  top.allow_only({"name", "kinematics", "end_effectors", "limits", "inertia", "friction", "armature"});
 
   RobotConfig config;
   config.path = path;
@@ -318,6 +325,7 @@ RobotConfig load_robot_config(const std::string& path) {
   });
 
   config.friction_sets = named_sets(top["friction"], config.default_friction, "none", friction_set);
+  if (top.has("armature")) config.armature = read_armature(top["armature"]);
   return config;
 }
 

@@ -45,25 +45,16 @@ inline constexpr double kScenarioDamping[7] = {50, 50, 50, 20, 20, 20, 10};
 // The scenario runs this long after the trajectory ends (the robot holds its last pose) [s].
 inline constexpr double kScenarioHold = 0.5;
 
-// The motors' rotor inertia the scenario's plant carries (plant.armature), with its source; zero
-// values: none. A real FR3 has it, and without it the wrist rings under the impedance gains
-// (configs/scenarios/libfranka_fr3.yaml).
-struct Armature {
-  Vector7 values = Vector7::Zero();
-  std::string source;
-};
-
 // The shortest text that reads back as exactly `value`.
 std::string exact_number(double value);
 
 // The scenario text for a trajectory whose first row is `initial_q`, lasting `duration` [s].
-std::string scenario_text(const std::string& title, const Vector7& initial_q, double duration, const Tool& tool,
-                          const Armature& armature);
+std::string scenario_text(const std::string& title, const Vector7& initial_q, double duration, const Tool& tool);
 
 // Writes trajectory.csv, robot.yaml (a copy of robot_file), scenario.yaml and plan.yaml into `dir`
 // (created if needed). `made`: the engine's own record (written under `plan:`).
 void write_plan_files(const std::string& dir, const PlanRequest& request, const Versions& versions,
-                      const std::string& robot_file, const Armature& armature, const Scene& scene,
+                      const std::string& robot_file, const Scene& scene,
                       const JointLog& trajectory, const nlohmann::json& made);
 
 // The request of a plan.yaml, validated (ConfigError naming the file and key).

@@ -23,10 +23,8 @@ namespace csp::run {
 std::string robot_file(const std::string& robot);
 std::string scene_file(const std::string& scene);
 
-// The robot with the scene's tool as its end effector (mass and TCP) and its motors' armature
-// (planners::Armature: an FR3's, as configs/scenarios/libfranka_fr3.yaml has it): what a plan is
-// made for, and what its scenario's plant is.
-planners::Armature robot_armature(const std::string& robot_file);
+// The robot with the scene's tool as its end effector (mass and TCP) and the robot file's
+// armature (an FR3's motors): what a plan is made for, and what its scenario's plant is.
 Model scene_model(const std::string& robot_file, const Scene& scene);
 
 // What a planning subcommand was asked: the request plan.yaml records (its seed seeds every

@@ -27,6 +27,13 @@ struct InertiaSet {
   bool physical = true;
 };
 
+// The motors' rotor inertia reflected to the links (Featherstone sec. 7.3), with its source: the
+// plant an emulated arm integrates carries it; zero values: none given.
+struct Armature {
+  Vector7 values = Vector7::Zero();   // [kg m^2]
+  std::string source;
+};
+
 struct RobotConfig {
   std::string path;
   std::string name;
@@ -40,11 +47,13 @@ struct RobotConfig {
   std::map<std::string, InertiaSet> inertia_sets;
   std::string default_friction;                                  // may be "none"
   std::map<std::string, FrictionModel> friction_sets;            // "none" is implicit
+  Armature armature;                                             // optional in the file
 };
 
 RobotConfig load_robot_config(const std::string& path);
 
-// Which named sets to use; an empty name means the config's default.
+// Which named sets to use; an empty name means the config's default. The model has no armature:
+// the robot file's (RobotConfig::armature) is the plant's, which a caller adds.
 struct ModelOptions {
   std::string inertia;
   std::string friction;

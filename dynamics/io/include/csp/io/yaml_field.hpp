@@ -138,6 +138,12 @@ inline double non_negative(const Field& field) {
   return value;
 }
 
+inline Vector7 non_negative7(const Field& field) {
+  const Vector7 v = field.vector<7>();
+  if ((v.array() < 0.0).any()) field.fail("7 non-negative numbers");
+  return v;
+}
+
 // A load on the flange as libfranka's setLoad takes it: mass [kg] >= 0, optional CoM [m] in the
 // flange frame and inertia about the CoM (xx, xy, xz, yy, yz, zz) [kg m^2], physical when given.
 RigidBodyInertia flange_load(const Field& field);
@@ -145,5 +151,8 @@ RigidBodyInertia flange_load(const Field& field);
 // A flange -> TCP pose (libfranka's F_T_EE) as the files write it: a rotation about the flange's z
 // [rad] (`rotation_z`) and a translation [m] (`translation`).
 Transform flange_to_tcp(const Field& pose);
+
+// The motors' rotor inertia, `{values: [7] kg m^2 >= 0, source: "..."}` (robot file, scenario plant).
+Armature read_armature(const Field& field);
 
 }  // namespace csp
