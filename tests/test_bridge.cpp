@@ -188,6 +188,10 @@ TEST(BridgeServer, TwentyLostCommandsEndTheSessionAndConfigurationWaitsForIdle) 
   config_request_t recovery{};
   recovery.request = config_request_t::AUTOMATIC_ERROR_RECOVERY;
   EXPECT_TRUE(t.request(recovery).ok);
+  // Recovered, the robot is idle and its status still names the last reflex (CSP_STATUS.last_reflex).
+  EXPECT_EQ(t.server.state_message(0).robot_mode, robot_state_t::MODE_IDLE);
+  EXPECT_NE(t.server.emulator().reflex_reason().find("communication_constraints_violation"), std::string::npos)
+      << t.server.emulator().reflex_reason();
   EXPECT_TRUE(t.start(rt::ControlMode::kJointPosition).ok);
 }
 

@@ -72,7 +72,7 @@ MotionResult MotionSession::result() const {
   MotionResult result;
   result.reflex = emulator_.state().robot_mode == RobotMode::kReflex;
   result.errors = ErrorSet(emulator_.state().last_motion_errors);
-  result.reason = emulator_.reflex_reason();
+  if (result.reflex) result.reason = emulator_.reflex_reason();
   result.timing = driver_.report();
   return result;
 }

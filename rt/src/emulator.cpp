@@ -265,8 +265,7 @@ void Emulator::automatic_error_recovery() {
     gravity_compensation_torque();
     torque_loop_.tau_motor = torque_loop_.gravity;
   }
-  state_.robot_mode = RobotMode::kIdle;
-  reflex_reason_.clear();
+  state_.robot_mode = RobotMode::kIdle;   // reflex_reason() stays: CSP_STATUS reports the last reflex
 }
 
 void Emulator::start_motion(ControlMode mode, std::optional<ControllerMode> controller) {

@@ -70,7 +70,7 @@ struct LoopOptions {
 struct MotionResult {
   bool reflex = false;          // the motion ended in a reflex (see errors and reason)
   ErrorSet errors;                // the errors that aborted it
-  std::string reason;           // Emulator::reflex_reason()
+  std::string reason;           // Emulator::reflex_reason() if this motion ended in a reflex
   TimingReport timing;   // round_trip_us: the controller's compute time
 };
 

@@ -165,7 +165,8 @@ class Emulator {
   // What the scene does to the arm (settings().scene): the true contact wrench on the tool, the
   // penetration, the contacts of the last substep. Nothing in contact without a scene.
   const ContactState& contact() const { return contact_state_; }
-  // Why the last reflex happened: the error names, or what the controller did wrong.
+  // Why the last reflex happened: the error names, or what the controller did wrong. Kept after
+  // automatic_error_recovery(), as RobotState::last_motion_errors is; empty before any reflex.
   const std::string& reflex_reason() const { return reflex_reason_; }
 
   // Motions, like the FCI: start (Idle -> Move), one step per 1 ms cycle, finish (-> Idle).
