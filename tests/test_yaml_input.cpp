@@ -4,6 +4,7 @@
 // unknown key took 2.3 GB before the key was refused; masses, CoMs, frequencies and gains of 1e200
 // were accepted and blamed on the plant later. Each is now refused at once with one clear message.
 // The CTest TIMEOUT of this program turns a return of the slow paths into a failure, not a hang.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -210,6 +211,15 @@ TEST(YamlInput, ReplayRefusesARecordedAliasBombOrDeepNesting) {
   EXPECT_EQ(bomb.find('\n'), std::string::npos) << bomb;
   const std::string deep = replay_error(log_with_scenario_text("deep.lcmlog", recorded + deep_block_maps(600)));
   EXPECT_NE(deep.find("levels of nesting"), std::string::npos) << deep;
+}
+
+// `csp replay` of such a log: exit 2, one line on stderr.
+TEST(YamlInput, ReplayCommandRefusesARecordedAliasBomb) {
+  const std::string log = log_with_scenario_text("bomb_cli.lcmlog", read_text(kDefaultScenario) + alias_bomb(8));
+  const ProgramRun run = run_program(CSP_EXECUTABLE, {"replay", log});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+  EXPECT_NE(run.err.find("once aliases are expanded"), std::string::npos) << run.err;
 }
 
 // ---------------------------------------------------------------------------------------------
