@@ -138,10 +138,10 @@ class Mutator {
     return b;
   }
 
-  // YAML files: one time in eight a structural edit a line edit would not make (anchors and aliases,
+  // YAML files: one time in 16 a structural edit a line edit would not make (anchors and aliases,
   // an alias bomb, deep nesting, a big list under an unknown key), else text().
   std::string yaml(std::string s) {
-    if (below(8) != 0) return text(std::move(s));
+    if (below(16) != 0) return text(std::move(s));
     switch (below(6)) {
       case 0: {   // an alias bomb: `levels` lists of `width` aliases each to the list before
         const std::size_t levels = 1 + below(9), width = 2 + below(9);
