@@ -9,6 +9,7 @@
 // Exit code 0 when every input was accepted or rejected clearly; 1 otherwise (the first inputs of
 // each bad kind are printed).
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -62,9 +63,11 @@ struct Verdict {
   std::string detail;   // the message, or why it is unclear
 };
 
-// A rejection is clear when it is one line naming where the problem is (`source`).
+// A rejection is clear when it is one line naming where the problem is (`source`), and says what
+// is wrong (yaml-cpp's "bad file", its depth guard's message, does not).
 Verdict rejection(const std::string& message, const std::string& source) {
   if (message.find('\n') != std::string::npos) return {Outcome::kUnclear, "several lines: " + message};
+  if (message.find("bad file") != std::string::npos) return {Outcome::kUnclear, "does not say what is wrong: " + message};
   if (!source.empty() && message.find(source) == std::string::npos) return {Outcome::kUnclear, "does not name " + source + ": " + message};
   return {Outcome::kRejected, message};
 }
@@ -135,6 +138,59 @@ class Mutator {
     return b;
   }
 
+  // YAML files: one time in 16 a structural edit a line edit would not make (anchors and aliases,
+  // an alias bomb, deep nesting, a big list under an unknown key), else text().
+  std::string yaml(std::string s) {
+    if (below(16) != 0) return text(std::move(s));
+    switch (below(6)) {
+      case 0: {   // an alias bomb: `levels` lists of `width` aliases each to the list before
+        const std::size_t levels = 1 + below(9), width = 2 + below(9);
+        std::string list = "x";
+        for (std::size_t l = 0; l < levels; ++l) {
+          std::string items;
+          for (std::size_t i = 0; i < width; ++i) items += (i ? ", " : "") + list;
+          s += "bomb" + std::to_string(l) + ": &b" + std::to_string(l) + " [" + items + "]\n";
+          list = "*b" + std::to_string(l);
+        }
+        return s;
+      }
+      case 1: {   // an anchor on one value and its alias in place of another (maybe before the anchor)
+        std::vector<std::string> lines = split_lines(s);
+        std::vector<std::size_t> values;
+        for (std::size_t i = 0; i < lines.size(); ++i)
+          if (const std::size_t at = lines[i].find(": "); at != std::string::npos && lines[i].find('#') > at) values.push_back(i);
+        if (values.size() < 2) return s;
+        std::string& anchored = lines[pick(values)];
+        anchored.insert(anchored.find(": ") + 2, "&v ");
+        std::string& aliased = lines[pick(values)];
+        aliased = aliased.substr(0, aliased.find(": ") + 2) + "*v";
+        s.clear();
+        for (const std::string& line : lines) s += line + '\n';
+        return s;
+      }
+      case 2: return s + pick(std::vector<std::string>{"cycle: &c [*c]\n", "cycle: &c {a: *c}\n", "cycle: &c [[*c]]\n"});
+      case 3: {   // deep flow nesting (yaml-cpp's own guard is near 500 levels)
+        const std::size_t depth = 1 + below(3000);
+        const bool maps = below(2) == 0;
+        std::string open, close;
+        for (std::size_t d = 0; d < depth; ++d) open += maps ? "{a: " : "[", close += maps ? "}" : "]";
+        return s + "deep: " + open + "1" + close + "\n";
+      }
+      case 4: {   // deep block maps: one key per line, each indented one more
+        const std::size_t depth = 1 + below(1500);
+        s += "deep:\n";
+        for (std::size_t d = 1; d <= depth; ++d) s += std::string(d, ' ') + "k:\n";
+        return s + std::string(depth + 1, ' ') + "v: 1\n";
+      }
+      default: {   // a list under an unknown key: small, beyond 1 MB, or the 10 MB (1.4 GB once parsed)
+        const std::size_t items = pick(std::vector<std::size_t>{10, 1000, 300'000, 2'600'000});
+        std::string list = "- 1\n";
+        while (list.size() < 4 * items) list += list;
+        return s + "big:\n" + list.substr(0, 4 * items);
+      }
+    }
+  }
+
   std::mt19937_64& rng() { return rng_; }
 
  private:
@@ -196,11 +252,28 @@ bool finite(const rt::RobotState& s) {
   return true;
 }
 
+// A YAML input that takes the process's peak memory past 1 GB is unclear however it ends: a 10 MB
+// list under an unknown key took 2.3 GB before it was refused.
+Verdict within_memory(const std::function<Verdict()>& run) {
+  constexpr long kMaxPeakKb = 1L << 20;
+  const auto peak_kb = [] {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return usage.ru_maxrss;
+  };
+  const long before = peak_kb();
+  const Verdict verdict = run();
+  const long after = peak_kb();
+  if (after > kMaxPeakKb && after > before)
+    return {Outcome::kUnclear, "the peak memory grew to " + std::to_string(after >> 10) + " MB (" + verdict.detail + ")"};
+  return verdict;
+}
+
 Class robot_yaml() {
   const std::vector<std::string> bases = {read_text(std::string(CSP_SOURCE_DIR) + "/configs/robots/panda.yaml"),
                                           read_text(std::string(CSP_SOURCE_DIR) + "/configs/robots/fr3.yaml")};
-  return {"robot_yaml", [bases](Mutator& m) { return m.text(m.pick(bases)); },
-          [](const std::string& input) -> Verdict {
+  return {"robot_yaml", [bases](Mutator& m) { return m.yaml(m.pick(bases)); },
+          [](const std::string& input) { return within_memory([&]() -> Verdict {
             const std::string path = temp_dir() + "/robot.yaml";
             write_text(path, input);
             try {
@@ -215,7 +288,7 @@ Class robot_yaml() {
             } catch (const std::exception& e) {
               return {Outcome::kUnclear, std::string("not a ConfigError: ") + e.what()};
             }
-          }};
+          }); }};
 }
 
 Class scenario_yaml() {
@@ -229,8 +302,8 @@ Class scenario_yaml() {
       text.replace(at, 10, robots);
     bases.push_back(text);
   }
-  return {"scenario_yaml", [bases](Mutator& m) { return m.text(m.pick(bases)); },
-          [](const std::string& input) -> Verdict {
+  return {"scenario_yaml", [bases](Mutator& m) { return m.yaml(m.pick(bases)); },
+          [](const std::string& input) { return within_memory([&]() -> Verdict {
             const std::string path = temp_dir() + "/scenario.yaml";
             write_text(path, input);
             try {
@@ -248,7 +321,7 @@ Class scenario_yaml() {
             } catch (const std::exception& e) {
               return {Outcome::kUnclear, std::string("not a ConfigError: ") + e.what()};
             }
-          }};
+          }); }};
 }
 
 // Joint logs: the real Panda log's first rows, and the emulator's full column set.

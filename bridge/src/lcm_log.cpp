@@ -189,8 +189,7 @@ rt::Scenario scenario_from_message(const scenario_t& m) {
   const std::filesystem::path dir = temporary_folder("replay");
   rt::Scenario scenario;
   try {
-    check_yaml_layout(m.text, "the recorded scenario " + m.path);
-    YAML::Node root = YAML::Load(m.text);
+    YAML::Node root = parse_yaml_text(m.text, "the recorded scenario " + m.path);
     root["robot"] = "robot.yaml";
     write_text(dir / "robot.yaml", m.robot_text);
     YAML::Emitter out;
@@ -238,8 +237,7 @@ LogOutline outline(const std::string& log_path) {
 
 RecordedRobot::RecordedRobot(const scenario_t& record) : recorded_path(record.robot_path) {
   try {
-    check_yaml_layout(record.text, "the recorded scenario " + record.path);
-    const YAML::Node root = YAML::Load(record.text);
+    const YAML::Node root = parse_yaml_text(record.text, "the recorded scenario " + record.path);
     end_effector = root["end_effector"] ? root["end_effector"].as<std::string>() : "none";
     scene_tool = static_cast<bool>(root["scene"]);
   } catch (const std::exception& e) {

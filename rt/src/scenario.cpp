@@ -20,6 +20,54 @@ constexpr double kTrajectoryStartTolerance = 1e-6;
 // paths are on the task within 1e-8 (docs/planning-task-paths.md), its tests hold them to 1e-4 and 1e-3.
 constexpr double kScanPathStartTolerance = 1e-4, kScanPathAxisTolerance = 1e-3;
 
+// Bounds on the scenario's rates, gains and magnitudes, so that a typo such as 1e200 is named where
+// it is written instead of ending the run in a reflex or "plant diverged" that blames the plant.
+// A frequency the 1 kHz loop can represent: below its Nyquist frequency [Hz].
+constexpr double kLoopNyquistHz = 500.0;
+// setJointImpedance's bound [N m/rad], for every joint stiffness.
+constexpr double kMaxJointStiffness = 10000.0;
+// [N m s/rad]: critical damping of that stiffness on a joint inertia of 10 kg m^2 (more than an
+// arm's shoulder sees) is 630.
+constexpr double kMaxJointDamping = 1000.0;
+// setCartesianImpedance's upper bounds (libfranka robot.h: 10..3000 N/m, 1..300 N m/rad).
+constexpr double kMaxTranslationalStiffness = 3000.0, kMaxRotationalStiffness = 300.0;
+// [N m]: above any joint's torque limit (87 N m); a sensor noise or bias beyond it is no sensor's.
+constexpr double kMaxSensorTorque = 100.0;
+// A push of a tonne-force, a moment of a tonne at 10 cm: far beyond what the arm can take [N, N m].
+constexpr double kMaxWrenchForce = 10000.0, kMaxWrenchMoment = 1000.0;
+// [kg]: a scaled link's mass, as a robot file's masses.
+constexpr double kMaxLinkMass = 1000.0;
+// [m]: a wrench's point of application in its link's frame, as a robot file's lengths.
+constexpr double kMaxWrenchPoint = 10.0;
+// [us]: a second of latency is a thousand cycles, every command late.
+constexpr double kMaxLatencyUs = 1e6;
+
+std::string number_text(double value) {
+  std::string text = std::to_string(value);
+  text.erase(text.find_last_not_of('0') + 1);
+  if (text.back() == '.') text.pop_back();
+  return text;
+}
+
+// A non-negative number, or each of 7, of at most `max`; `why` says where the bound comes from.
+double at_most(const Field& f, double max, const std::string& unit, const std::string& why) {
+  const double v = non_negative(f);
+  if (v > max) f.fail("a number from 0 to " + number_text(max) + " " + unit + " (" + why + ")");
+  return v;
+}
+Vector7 at_most7(const Field& f, double max, const std::string& unit, const std::string& why) {
+  const Vector7 v = non_negative7(f);
+  if ((v.array() > max).any()) f.fail("7 numbers from 0 to " + number_text(max) + " " + unit + " (" + why + ")");
+  return v;
+}
+
+// A vector of at most `max` in magnitude.
+Vector3 bounded3(const Field& f, double max, const std::string& unit) {
+  const Vector3 v = f.vector<3>();
+  if (v.norm() > max) f.fail("3 numbers of magnitude at most " + number_text(max) + " " + unit);
+  return v;
+}
+
 Vector6 non_negative6(const Field& f) {
   const Vector6 v = f.vector<6>();
   if ((v.array() < 0.0).any()) f.fail("6 non-negative numbers");
@@ -50,6 +98,9 @@ void scale_links(const Field& f, ModelParameters& plant) {
     link.allow_only({"mass"});
     const double s = positive(link["mass"]);
     RigidBodyInertia& body = plant.links[static_cast<std::size_t>(number - 1)];
+    if (body.mass * s > kMaxLinkMass)
+      link["mass"].fail("a factor that keeps the link's mass at most 1000 kg (a robot file's bound; the link has " +
+                        number_text(body.mass) + " kg)");
     body.mass *= s;
     body.inertia *= s;
   }
@@ -76,7 +127,7 @@ std::shared_ptr<const JointLogReference> read_joint_log_reference(const Field& f
 
 // controller.trajectory: a ramped sine, or {file: F}, a joint log found relative to the scenario
 // that must start at initial_q.
-std::shared_ptr<const JointReference> read_trajectory(const Field& f, const Vector7& q_initial) {
+std::shared_ptr<const JointReference> read_trajectory(const Field& f, const Vector7& q_initial, const JointLimits& limits) {
   if (f.has("file")) {
     f.allow_only({"file"});
     auto reference = read_joint_log_reference(f["file"]);
@@ -90,10 +141,21 @@ std::shared_ptr<const JointReference> read_trajectory(const Field& f, const Vect
   }
   f.allow_only({"amplitude", "frequency_hz", "phase", "ramp", "file"});
   auto trajectory = std::make_shared<RampedSineReference>();
+  // A sine wider than its joint's range can only run into the limit; one at or above the loop's
+  // Nyquist frequency is not the sine the 1 kHz loop samples.
   trajectory->amplitude = non_negative7(f["amplitude"]);
+  for (int i = 0; i < kNumJoints; ++i)
+    if (trajectory->amplitude[i] > limits.q_max[i] - limits.q_min[i])
+      f["amplitude"].fail("amplitudes within each joint's range (joint " + std::to_string(i + 1) + ": " +
+                          number_text(limits.q_max[i] - limits.q_min[i]) + " rad)");
   trajectory->frequency_hz = non_negative7(f["frequency_hz"]);
-  if (f.has("phase")) trajectory->phase = f["phase"].vector<7>();
-  if (f.has("ramp")) trajectory->ramp = non_negative(f["ramp"]);
+  if ((trajectory->frequency_hz.array() >= kLoopNyquistHz).any())
+    f["frequency_hz"].fail("frequencies below 500 Hz (the 1 kHz loop's Nyquist frequency)");
+  if (f.has("phase")) {
+    trajectory->phase = f["phase"].vector<7>();
+    if ((trajectory->phase.array().abs() > 2.0 * M_PI).any()) f["phase"].fail("angles within +-2 pi rad");
+  }
+  if (f.has("ramp")) trajectory->ramp = at_most(f["ramp"], kMaxDuration, "s", "a year");
   return trajectory;
 }
 
@@ -212,7 +274,7 @@ void read_tissue(const Field& top, Scenario& s) {
   }
 }
 
-void read_controller(const Field& f, const Vector7& q_initial, ControllerSpec& c) {
+void read_controller(const Field& f, const Vector7& q_initial, const JointLimits& limits, ControllerSpec& c) {
   f.allow_only({"type", "stiffness", "damping", "feedforward", "translational_stiffness", "rotational_stiffness",
                 "trajectory", "desired_force", "force_k_p", "force_k_i", "force_integral_limit", "force_ramp",
                 "axis_damping", "settle", "path", "null_space_stiffness", "insertion", "insertion_time",
@@ -224,16 +286,18 @@ void read_controller(const Field& f, const Vector7& q_initial, ControllerSpec& c
     f["type"].fail("float, joint_impedance, joint_position, joint_velocity, cartesian_impedance, "
                    "cartesian_impedance_force, rcm or drilling");
   read_medical_controller(f, c.type, c.medical);
-  if (f.has("stiffness")) c.stiffness = non_negative7(f["stiffness"]);
-  if (f.has("damping")) c.damping = non_negative7(f["damping"]);
+  if (f.has("stiffness")) c.stiffness = at_most7(f["stiffness"], kMaxJointStiffness, "N m/rad", "setJointImpedance's bound");
+  if (f.has("damping")) c.damping = at_most7(f["damping"], kMaxJointDamping, "N m s/rad", "above critical damping of the stiffest joint");
   if (f.has("feedforward")) c.feedforward = f["feedforward"].boolean();
-  if (f.has("translational_stiffness")) c.translational_stiffness = non_negative(f["translational_stiffness"]);
-  if (f.has("rotational_stiffness")) c.rotational_stiffness = non_negative(f["rotational_stiffness"]);
+  if (f.has("translational_stiffness"))
+    c.translational_stiffness = at_most(f["translational_stiffness"], kMaxTranslationalStiffness, "N/m", "setCartesianImpedance's bound");
+  if (f.has("rotational_stiffness"))
+    c.rotational_stiffness = at_most(f["rotational_stiffness"], kMaxRotationalStiffness, "N m/rad", "setCartesianImpedance's bound");
   if (f.has("trajectory")) {
     if (c.type == "float" || c.type == "cartesian_impedance" || is_medical_controller(c.type))
       f["trajectory"].fail("no trajectory for a " + c.type + " controller (joint_impedance, joint_position and "
                            "joint_velocity track one)");
-    c.trajectory = read_trajectory(f["trajectory"], q_initial);
+    c.trajectory = read_trajectory(f["trajectory"], q_initial, limits);
   }
   if (c.type == "joint_impedance" && !f.has("stiffness")) f.fail("`stiffness` for a joint_impedance controller");
 }
@@ -244,12 +308,25 @@ void read_robot_settings(const Field& f, EmulatorSettings& s) {
   if (f.has("substeps")) {
     s.substeps = static_cast<int>(f["substeps"].whole_number(1, 100));
   }
-  if (f.has("torque_loop_bandwidth_hz")) s.torque_loop_bandwidth_hz = positive(f["torque_loop_bandwidth_hz"]);
-  if (f.has("tau_ext_cutoff_hz")) s.tau_ext_cutoff_hz = positive(f["tau_ext_cutoff_hz"]);
+  // The torque loop runs once per substep, the external torque's filter once per cycle: each below its Nyquist frequency.
+  if (f.has("torque_loop_bandwidth_hz")) {
+    s.torque_loop_bandwidth_hz = positive(f["torque_loop_bandwidth_hz"]);
+    if (s.torque_loop_bandwidth_hz >= kLoopNyquistHz * s.substeps)
+      f["torque_loop_bandwidth_hz"].fail("a bandwidth below " + number_text(kLoopNyquistHz * s.substeps) +
+                                         " Hz (the Nyquist frequency of `substeps` steps per 1 ms cycle)");
+  }
+  if (f.has("tau_ext_cutoff_hz")) {
+    s.tau_ext_cutoff_hz = positive(f["tau_ext_cutoff_hz"]);
+    if (s.tau_ext_cutoff_hz >= kLoopNyquistHz) f["tau_ext_cutoff_hz"].fail("a cutoff below 500 Hz (the 1 kHz loop's Nyquist frequency)");
+  }
   if (f.has("power_limit")) s.plant.joint_limits.power_max = positive(f["power_limit"]);
   if (f.has("gravity_compensation")) s.gravity_compensation = f["gravity_compensation"].boolean();
-  if (f.has("tau_J_noise")) s.tau_J_noise = non_negative7(f["tau_J_noise"]);
-  if (f.has("tau_J_bias")) s.tau_J_bias = f["tau_J_bias"].vector<7>();
+  if (f.has("tau_J_noise")) s.tau_J_noise = at_most7(f["tau_J_noise"], kMaxSensorTorque, "N m", "above every joint's torque limit");
+  if (f.has("tau_J_bias")) {
+    s.tau_J_bias = f["tau_J_bias"].vector<7>();
+    if ((s.tau_J_bias.array().abs() > kMaxSensorTorque).any())
+      f["tau_J_bias"].fail("7 numbers within +-100 N m (above every joint's torque limit)");
+  }
   if (f.has("joint_impedance")) {
     s.joint_stiffness = non_negative7(f["joint_impedance"]);
     if ((s.joint_stiffness.array() > 10000.0).any()) f["joint_impedance"].fail("stiffnesses of at most 10000 N m/rad (setJointImpedance's bound)");
@@ -282,9 +359,13 @@ void read_faults(const Field& f, Scenario& scenario) {
   if (f.has("latency_us")) {
     const Field l = f["latency_us"];
     l.allow_only({"mean", "jitter", "budget"});
-    faults.latency_mean_us = non_negative(l["mean"]);
-    if (l.has("jitter")) faults.latency_jitter_us = non_negative(l["jitter"]);
-    if (l.has("budget")) faults.budget_us = positive(l["budget"]);
+    const std::string second = "a second: a thousand cycles";
+    faults.latency_mean_us = at_most(l["mean"], kMaxLatencyUs, "us", second);
+    if (l.has("jitter")) faults.latency_jitter_us = at_most(l["jitter"], kMaxLatencyUs, "us", second);
+    if (l.has("budget")) {
+      faults.budget_us = positive(l["budget"]);
+      at_most(l["budget"], kMaxLatencyUs, "us", second);
+    }
   }
   if (f.has("lost_command_bursts")) {
     const Field bursts = f["lost_command_bursts"];
@@ -303,13 +384,13 @@ ExternalWrench read_wrench(const Field& f) {
   f.allow_only({"link", "point", "force", "moment", "start", "end", "ramp"});
   ExternalWrench w;
   w.link = static_cast<int>(f["link"].whole_number(1, kNumJoints));
-  if (f.has("point")) w.point = f["point"].vector<3>();
-  if (f.has("force")) w.force = f["force"].vector<3>();
-  if (f.has("moment")) w.moment = f["moment"].vector<3>();
+  if (f.has("point")) w.point = bounded3(f["point"], kMaxWrenchPoint, "m");
+  if (f.has("force")) w.force = bounded3(f["force"], kMaxWrenchForce, "N");
+  if (f.has("moment")) w.moment = bounded3(f["moment"], kMaxWrenchMoment, "N m");
   w.start = non_negative(f["start"]);
   w.end = f["end"].number();
   if (w.end <= w.start) f["end"].fail("a time after `start`");
-  if (f.has("ramp")) w.ramp = non_negative(f["ramp"]);
+  if (f.has("ramp")) w.ramp = at_most(f["ramp"], kMaxDuration, "s", "a year");
   return w;
 }
 
@@ -451,7 +532,7 @@ Scenario load_scenario(const std::string& path) {
     s.seed = static_cast<uint64_t>(top["seed"].whole_number(0, int64_t{1} << 53));
   }
   if (top.has("robot_settings")) read_robot_settings(top["robot_settings"], s.emulator);
-  read_controller(top["controller"], s.emulator.q_initial, s.controller);
+  read_controller(top["controller"], s.emulator.q_initial, limits, s.controller);
   const std::shared_ptr<const Scene>& scene = s.emulator.scene;
   s.controller.medical.scene = scene;
   if (is_medical_controller(s.controller.type) && !scene)

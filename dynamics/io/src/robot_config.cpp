@@ -5,7 +5,13 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <map>
+#include <optional>
 #include <set>
+#include <system_error>
+
+#include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/eventhandler.h>
 
 #include "csp/io/yaml_field.hpp"
 
@@ -193,6 +199,14 @@ RigidBodyInertia flange_load(const Field& field) {
   return body;
 }
 
+RigidBodyInertia flange_body(const Field& field) {
+  RigidBodyInertia body{mass(field["mass"]), center_of_mass(field["com"]), inertia_tensor(field["inertia"])};
+  if (body.mass < 0.0) field["mass"].fail("a non-negative mass");
+  if (body.mass > 0.0 && !is_physical_inertia(body.inertia))
+    field["inertia"].fail("a physical inertia (positive definite, triangle inequality)");
+  return body;
+}
+
 Armature read_armature(const Field& field) {
   field.allow_only({"values", "source"});
   const Vector7 values = non_negative7(field["values"]);
@@ -202,25 +216,120 @@ Armature read_armature(const Field& field) {
 
 namespace {
 
-// yaml-cpp keeps every pair of a mapping but looks keys up by their first occurrence, so a key
-// written twice would silently ignore its second value (appending `duration: 0.5` to a scenario
-// would not change it).
-void reject_duplicate_keys(const YAML::Node& node, const std::string& path, const std::string& key_path) {
-  if (node.IsSequence()) {
-    for (std::size_t i = 0; i < node.size(); ++i) reject_duplicate_keys(node[i], path, key_path + "[" + std::to_string(i) + "]");
-    return;
+// Bounds on what a YAML file of CSP's may hold, checked before yaml-cpp builds a single node (each
+// node costs it about 500 bytes: a 10 MB list under an unknown key took 1.4 GB before the key was
+// refused). The largest shipped files (a robot file, a plan) are 15 kB, about 1500 nodes, fewer
+// than 10 levels deep; trajectories and logs are CSV files.
+// An alias counts as the whole node it names, as every reader of the document sees it: 8 levels of
+// ten aliases each (450 bytes) would be 10^8 nodes.
+constexpr std::size_t kMaxYamlBytes = 1 << 20;      // 70x the largest shipped file
+constexpr std::size_t kMaxYamlNodes = 100'000;      // 60x; a few tens of MB while building
+constexpr std::size_t kMaxYamlDepth = 50;           // far below yaml-cpp's own guard, which says only "bad file"
+
+std::string line_of(const YAML::Mark& mark) { return "line " + std::to_string(mark.line + 1); }
+
+// One pass over the parser's events, before any node is built: the document's size once aliases
+// are expanded, its depth, and keys given twice. yaml-cpp keeps every pair of a mapping but looks
+// keys up by their first occurrence, so a key written twice would silently ignore its second value
+// (appending `duration: 0.5` to a scenario would not change it). An anchored node is checked once,
+// where it is written; an alias adds its size without a second walk.
+class YamlShape final : public YAML::EventHandler {
+ public:
+  explicit YamlShape(std::string name) : name_(std::move(name)) {}
+
+  void OnDocumentStart(const YAML::Mark&) override { anchors_.clear(); }   // yaml-cpp numbers anchors per document
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t anchor) override { leaf(mark, anchor, nullptr); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor, const std::string& value) override {
+    leaf(mark, anchor, &value);
   }
-  if (!node.IsMap()) return;
-  std::set<std::string> seen;
-  for (const auto& item : node) {
-    const std::string key = printable_key(item.first.Scalar());
-    const std::string child_path = key_path.empty() ? key : key_path + "." + key;
-    if (!seen.insert(key).second)
-      throw ConfigError(path + ": " + child_path + ": key given twice (line " + std::to_string(item.first.Mark().line + 1) +
-                        "); expected each key once");
-    reject_duplicate_keys(item.second, path, child_path);
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t anchor) override {
+    const auto named = anchors_.find(anchor);
+    if (named == anchors_.end())   // the alias is inside the node it names
+      fail(mark, "no alias inside the node its anchor names (a cycle)");
+    const std::string* scalar = named->second.scalar ? &*named->second.scalar : nullptr;
+    child(mark, scalar);
+    add(mark, named->second.nodes);
   }
-}
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor, YAML::EmitterStyle::value) override {
+    open(mark, anchor, false);
+  }
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor, YAML::EmitterStyle::value) override {
+    open(mark, anchor, true);
+  }
+  void OnSequenceEnd() override { close(); }
+  void OnMapEnd() override { close(); }
+
+ private:
+  struct Collection {
+    bool map = false;
+    std::string path;               // key path, as Field names it
+    std::size_t children = 0;       // keys and values of a map, items of a list
+    std::string key;                // a map's current key
+    std::set<std::string> keys;     // a map's keys so far
+    YAML::anchor_t anchor = 0;
+    std::size_t first_node = 0;     // nodes_ when it opened
+  };
+  struct Anchored {
+    std::size_t nodes = 0;
+    std::optional<std::string> scalar;   // an anchored scalar may be used as a key
+  };
+
+  [[noreturn]] void fail(const YAML::Mark& mark, const std::string& expected) const {
+    throw ConfigError(name_ + ": " + line_of(mark) + ": expected " + expected);
+  }
+
+  // A new node in the open collection: a map's key is checked against the keys before it.
+  void child(const YAML::Mark& mark, const std::string* scalar) {
+    if (open_.empty()) return;
+    Collection& c = open_.back();
+    if (c.map && c.children % 2 == 0) {
+      c.key = scalar ? printable_key(*scalar) : "?";
+      if (scalar && !c.keys.insert(c.key).second)
+        throw ConfigError(name_ + ": " + path_of(c) + ": key given twice (" + line_of(mark) + "); expected each key once");
+    }
+    ++c.children;
+  }
+
+  // The key path of the node the open collection is receiving.
+  std::string path_of(const Collection& c) const {
+    if (c.map) return c.path.empty() ? c.key : c.path + "." + c.key;
+    return c.path + "[" + std::to_string(c.children - 1) + "]";
+  }
+
+  void add(const YAML::Mark& mark, std::size_t nodes) {
+    nodes_ += nodes;
+    if (nodes_ > kMaxYamlNodes)
+      fail(mark, "at most " + std::to_string(kMaxYamlNodes) + " nodes once aliases are expanded (CSP's files have a few "
+                 "thousand; trajectories belong in CSV files)");
+  }
+
+  void leaf(const YAML::Mark& mark, YAML::anchor_t anchor, const std::string* scalar) {
+    child(mark, scalar);
+    add(mark, 1);
+    if (anchor) anchors_[anchor] = {1, scalar ? std::optional<std::string>(*scalar) : std::nullopt};
+  }
+
+  void open(const YAML::Mark& mark, YAML::anchor_t anchor, bool map) {
+    child(mark, nullptr);
+    if (open_.size() == kMaxYamlDepth)
+      fail(mark, "at most " + std::to_string(kMaxYamlDepth) + " levels of nesting (CSP's files have fewer than 10)");
+    const std::string path = open_.empty() ? "" : path_of(open_.back());
+    add(mark, 1);
+    open_.push_back({map, path, 0, {}, {}, anchor, nodes_ - 1});
+  }
+
+  void close() {
+    const Collection& c = open_.back();
+    if (c.anchor) anchors_[c.anchor] = {nodes_ - c.first_node, std::nullopt};
+    open_.pop_back();
+  }
+
+  std::string name_;
+  std::vector<Collection> open_;
+  std::map<YAML::anchor_t, Anchored> anchors_;   // the anchors whose node is complete
+  std::size_t nodes_ = 0;                        // so far, aliases expanded
+};
 
 }  // namespace
 
@@ -250,32 +359,47 @@ void check_yaml_layout(const std::string& text, const std::string& path) {
   }
 }
 
+YAML::Node parse_yaml_text(const std::string& text, const std::string& name) {
+  if (text.size() > kMaxYamlBytes)
+    throw ConfigError(name + ": expected at most " + std::to_string(kMaxYamlBytes >> 20) + " MB of YAML (CSP's files have "
+                      "tens of kB), found " + std::to_string(text.size()) + " bytes");
+  check_yaml_layout(text, name);
+  std::vector<YAML::Node> documents;
+  try {
+    std::istringstream in(text);
+    YAML::Parser parser(in);
+    YamlShape shape(name);
+    while (parser.HandleNextDocument(shape)) {
+    }
+    documents = YAML::LoadAll(text);
+  } catch (const YAML::DeepRecursion& e) {   // yaml-cpp says only "bad file"; YamlShape should stop it first
+    throw ConfigError(name + ": " + line_of(e.mark) + ": expected at most " + std::to_string(kMaxYamlDepth) +
+                      " levels of nesting");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(name + ": not valid YAML: " + printable_key(e.msg) + " (" + line_of(e.mark) + ")");
+  }
+  if (documents.size() > 1)
+    throw ConfigError(name + ": expected one YAML document, found " + std::to_string(documents.size()) +
+                      " (the second starts at " + line_of(documents[1].Mark()) + ")");
+  return documents.empty() ? YAML::Node() : documents.front();
+}
+
 YAML::Node load_yaml_file(const std::string& path, const std::string& what) {
-  if (!std::filesystem::is_regular_file(path))
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
     throw ConfigError(path + ": cannot open the " + what + " (missing, or not a regular file)");
+  // Refused before it is read: a file of gigabytes would not fit in memory.
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (!error && size > kMaxYamlBytes)
+    throw ConfigError(path + ": expected at most " + std::to_string(kMaxYamlBytes >> 20) + " MB for a " + what +
+                      " (CSP's files have tens of kB), found " + std::to_string(size) + " bytes");
   std::ostringstream text;
   {
     std::ifstream in(path, std::ios::binary);
-    if (!(text << in.rdbuf()) && in.peek() != std::ifstream::traits_type::eof())
+    if (!in || (!(text << in.rdbuf()) && in.peek() != std::ifstream::traits_type::eof()))
       throw ConfigError(path + ": cannot read the " + what);
   }
-  check_yaml_layout(text.str(), path);
-  std::vector<YAML::Node> documents;
-  try {
-    documents = YAML::LoadAll(text.str());
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(path + ": cannot open the " + what);
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(path + ": not valid YAML: " + printable_key(e.msg) + " (line " + std::to_string(e.mark.line + 1) + ")");
-  } catch (const std::exception& e) {   // e.g. an I/O error while reading
-    throw ConfigError(path + ": cannot read the " + what + ": " + e.what());
-  }
-  if (documents.size() > 1)
-    throw ConfigError(path + ": expected one YAML document, found " + std::to_string(documents.size()) +
-                      " (the second starts at line " + std::to_string(documents[1].Mark().line + 1) + ")");
-  const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
-  reject_duplicate_keys(root, path, "");
-  return root;
+  return parse_yaml_text(text.str(), path);
 }
 
 RobotConfig load_robot_config(const std::string& path) {
@@ -299,11 +423,7 @@ RobotConfig load_robot_config(const std::string& path) {
     const Field ee = end_effectors[name];
     if (name == "none") ee.fail("another name (`none` is built in)");
     ee.allow_only({"source", "F_T_EE", "mass", "com", "inertia"});
-    RigidBodyInertia body{ee["mass"].number(), ee["com"].vector<3>(), inertia_tensor(ee["inertia"])};
-    if (body.mass < 0.0) ee["mass"].fail("a non-negative mass");
-    if (body.mass > 0.0 && !is_physical_inertia(body.inertia)) ee["inertia"].fail("a physical inertia");
-    config.end_effectors.emplace(
-        name, EndEffectorDescription{flange_to_tcp(ee["F_T_EE"]), body});
+    config.end_effectors.emplace(name, EndEffectorDescription{flange_to_tcp(ee["F_T_EE"]), flange_body(ee)});
   }
 
   const Field limits = top["limits"];

@@ -87,7 +87,12 @@ std::map<std::string, Material> materials(const Field& f) {
 ObstacleMotion motion(const Field& f) {
   f.allow_only({"amplitude", "frequency_hz", "source"});
   require_source(f);
-  return {f["amplitude"].vector<3>(), positive(f["frequency_hz"])};
+  // A motion the 1 kHz loop can sample (below its Nyquist frequency), within a robot's reach.
+  const Vector3 amplitude = f["amplitude"].vector<3>();
+  if (amplitude.norm() > 10.0) f["amplitude"].fail("an amplitude within 10 m");
+  const double frequency_hz = positive(f["frequency_hz"]);
+  if (frequency_hz >= 500.0) f["frequency_hz"].fail("a frequency below 500 Hz (the 1 kHz loop's Nyquist frequency)");
+  return {amplitude, frequency_hz};
 }
 
 Tool tool(const Field& f) {
@@ -102,11 +107,8 @@ Tool tool(const Field& f) {
     tool.capsules.push_back({c["name"].text(), capsule(c, {"name", "a", "b", "radius"})});
   }
   tool.F_T_EE = flange_to_tcp(f["F_T_EE"]);
-  const Eigen::Matrix<double, 6, 1> I = f["inertia"].vector<6>();   // xx, xy, xz, yy, yz, zz about the CoM
-  tool.inertia.mass = positive(f["mass"]);
-  tool.inertia.com = f["com"].vector<3>();
-  tool.inertia.inertia << I[0], I[1], I[2], I[1], I[3], I[4], I[2], I[4], I[5];
-  if (!is_physical_inertia(tool.inertia.inertia)) f["inertia"].fail("a physical inertia about the CoM");
+  tool.inertia = flange_body(f);
+  if (tool.inertia.mass == 0.0) f["mass"].fail("a positive mass");
   return tool;
 }
 

@@ -15,8 +15,13 @@
 
 namespace csp {
 
-// Parse a YAML file; a missing, unreadable or malformed file throws ConfigError naming it.
+// Parse a YAML file; a missing, unreadable or malformed file throws ConfigError naming it, and so
+// does one too big for a file of CSP's: more than 1 MB, more than 100000 nodes once aliases are
+// expanded (an alias bomb), more than 50 levels deep. Keys given twice are refused too.
 YAML::Node load_yaml_file(const std::string& path, const std::string& what);
+
+// The same for YAML text (a scenario recorded in a log); `name` starts every message.
+YAML::Node parse_yaml_text(const std::string& text, const std::string& name);
 
 // The layout CSP's YAML files must have before yaml-cpp parses them: one document whose first
 // content line is a top-level mapping key. Throws ConfigError naming `path` and the line.
@@ -147,6 +152,12 @@ inline Vector7 non_negative7(const Field& field) {
 // A load on the flange as libfranka's setLoad takes it: mass [kg] >= 0, optional CoM [m] in the
 // flange frame and inertia about the CoM (xx, xy, xz, yy, yz, zz) [kg m^2], physical when given.
 RigidBodyInertia flange_load(const Field& field);
+
+// A body the flange carries (a robot file's end effector, a scene's tool) from `field`'s keys
+// `mass` [kg] >= 0, `com` [m] in the flange frame and `inertia` about the CoM (6 numbers) [kg m^2],
+// within a robot file's bounds (1000 kg, 10 m, 1000 kg m^2) and physical when it has a mass. The
+// caller allows its other keys.
+RigidBodyInertia flange_body(const Field& field);
 
 // A flange -> TCP pose (libfranka's F_T_EE) as the files write it: a rotation about the flange's z
 // [rad] (`rotation_z`) and a translation [m] (`translation`).
