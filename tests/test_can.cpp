@@ -451,7 +451,7 @@ TEST_F(CanBus, RestrictedCanIdsAreRefusedForPdosAndEmcy) {
   const char* done = "6000000000";
   const char* invalid_value = "8030000906";   // 0x06090030 little-endian
   // TPDO1 (0x1800), RPDO2 (0x1401) and EMCY (0x1014, no sub-index).
-  for (const auto [index, sub] : {std::pair{0x1800, 1}, std::pair{0x1401, 1}, std::pair{0x1014, 0}}) {
+  for (const auto& [index, sub] : {std::pair{0x1800, 1}, std::pair{0x1401, 1}, std::pair{0x1014, 0}}) {
     // A valid object cannot be moved, not even to a free id: bit 31 first.
     EXPECT_EQ(download(index, sub, 0x1F0), answer(index, sub, invalid_value)) << std::hex << index;
     EXPECT_EQ(download(index, sub, 0x80000000u | 0x1F0), answer(index, sub, done)) << std::hex << index;
@@ -469,7 +469,7 @@ TEST_F(CanBus, RestrictedCanIdsAreRefusedForPdosAndEmcy) {
   download(0x1800, 1, 0x190);
   download(0x1014, 0, 0x0F1);
   std::vector<std::string> frames = send("000#0100");
-  for (const std::string& request : {"080#", "201#0F", "080#"})   // an RPDO shorter than its mapping: EMCY 0x8210
+  for (const char* request : {"080#", "201#0F", "080#"})   // an RPDO shorter than its mapping: EMCY 0x8210
     for (const std::string& f : send(request)) frames.push_back(f);
   EXPECT_NE(std::find(frames.begin(), frames.end(), "0F1#108200FF01000000"), frames.end());
   EXPECT_EQ(std::count_if(frames.begin(), frames.end(), [](const std::string& f) { return f.rfind("190#", 0) == 0; }), 2);

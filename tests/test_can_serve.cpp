@@ -498,7 +498,7 @@ TEST(CanServeFuzz, RandomStatefulSequencesKeepTheInvariants) {
   const std::vector<uint32_t> restricted{0x000, 0x001, 0x07F, 0x101, 0x180, 0x581, 0x5FF, 0x601, 0x67F, 0x6E0, 0x6FF, 0x701, 0x77F, 0x780, 0x7FF};
   int accepted_cob_writes = 0, refused_cob_writes = 0, motions_seen = 0, targets_ignored = 0;
   std::set<uint32_t> ids_before = ids_in_use();
-  for (int step = 0; step < 3000; ++step) {
+  for (int step = 0; step < 2000; ++step) {
     step_frames.clear();
     const int kind = pick(16);
     bool cycles = false;

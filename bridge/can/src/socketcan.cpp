@@ -101,9 +101,8 @@ std::optional<Frame> SocketCan::receive() {
     iovec io[kBatch];
     mmsghdr messages[kBatch];
     // Room for the two ancillary items of each frame: the drop count and the receive time.
-    union Control {
-      char bytes[CMSG_SPACE(sizeof(uint32_t)) + CMSG_SPACE(sizeof(timespec))];
-      cmsghdr align;
+    struct Control {
+      alignas(cmsghdr) char bytes[CMSG_SPACE(sizeof(uint32_t)) + CMSG_SPACE(sizeof(timespec))];
     } control[kBatch];
     for (int i = 0; i < kBatch; ++i) {
       io[i] = iovec{&raw[i], sizeof raw[i]};
