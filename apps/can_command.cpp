@@ -79,6 +79,9 @@ int run_serve(const CanArguments& args) {
               static_cast<unsigned long long>(r.bus.syncs), static_cast<unsigned long long>(r.bus.missing_syncs),
               static_cast<unsigned long long>(r.bus.lost_cycles), static_cast<unsigned long long>(r.bus.torn_cycles),
               static_cast<unsigned long long>(r.bus.ignored_frames), static_cast<unsigned long long>(r.arm.mixed_modes));
+  std::printf("  targets ignored: %llu cycles with a drive in operation enabled and no motion on its target, "
+              "%llu motions ended with drives left in operation enabled\n",
+              static_cast<unsigned long long>(r.arm.ignored_cycles), static_cast<unsigned long long>(r.arm.abandoned_motions));
   for (const can::InterfaceReport& i : r.interfaces) {
     std::string joints;
     for (int j : i.joints) {
@@ -86,11 +89,12 @@ int run_serve(const CanArguments& args) {
       joints += std::to_string(j);
     }
     std::printf("  %s (joints %s): %llu frames, %llu bits (worst-case stuffing), load at %.0f bit/s and 1 kHz: %.1f %% (%.0f bit/s of wall time); "
-                "received %llu, sent %llu, skipped %llu, send failures %llu\n",
+                "received %llu, dropped %llu (receive queue full), late %llu (handled > 1 ms after they came), sent %llu, skipped %llu, send failures %llu\n",
                 i.name.c_str(), joints.c_str(), static_cast<unsigned long long>(i.load.frames()),
                 static_cast<unsigned long long>(i.load.bits()), args.bitrate, i.load_percent,
                 static_cast<double>(i.load.bits()) / r.timing.wall_seconds,
-                static_cast<unsigned long long>(i.socket.received), static_cast<unsigned long long>(i.socket.sent),
+                static_cast<unsigned long long>(i.socket.received), static_cast<unsigned long long>(i.socket.dropped),
+                static_cast<unsigned long long>(i.socket.late), static_cast<unsigned long long>(i.socket.sent),
                 static_cast<unsigned long long>(i.socket.skipped), static_cast<unsigned long long>(i.socket.send_failures));
   }
   if (!r.last_reflex.empty()) std::printf("  last reflex: %s\n", r.last_reflex.c_str());

@@ -427,6 +427,99 @@ TEST_F(CanBus, PdoRemapBySdoAsACiA302Master) {
   EXPECT_EQ(send("601#40001A0000000000"), std::vector<std::string>{"581#4F001A0003000000"});
 }
 
+// CiA 301 7.3.5, "restricted CAN-IDs": NMT 0x000, 0x001-0x07F, 0x101-0x180, SDO 0x581-0x5FF and
+// 0x601-0x67F, 0x6E0-0x6FF, heartbeat 0x701-0x77F, 0x780-0x7FF; no SYNC, TIME, EMCY, PDO or SDO may
+// use them. A COB-ID (bits 0-10, bit 31 = "does not exist") written by SDO expedited download of
+// 4 bytes (0x23) is refused with abort 0x06090030 (invalid value for parameter) when it switches the
+// object on with a restricted id or the SYNC's 0x080, or moves an object that exists.
+TEST_F(CanBus, RestrictedCanIdsAreRefusedForPdosAndEmcy) {
+  const std::vector<uint32_t> refused{0x000, 0x001, 0x07F, 0x080, 0x101, 0x180, 0x581, 0x5FF,
+                                      0x601, 0x67F, 0x6E0, 0x6FF, 0x701, 0x77F, 0x780, 0x7FF};
+  const std::vector<uint32_t> allowed{0x100, 0x190, 0x580, 0x600, 0x680, 0x6DF, 0x700};
+  // "601#23 <index LE> <sub> <value LE>"; the answer 60 (done) or 80 + abort code LE.
+  const auto download = [&](int index, int sub, uint32_t value) {
+    char request[32];
+    std::snprintf(request, sizeof request, "601#23%02X%02X%02X%02X%02X%02X%02X", index & 0xFF, index >> 8, sub, value & 0xFF,
+                  (value >> 8) & 0xFF, (value >> 16) & 0xFF, value >> 24);
+    return send(request);
+  };
+  const auto answer = [](int index, int sub, const char* tail) {
+    char reply[32];
+    std::snprintf(reply, sizeof reply, "581#%s%02X%02X%02X%s", tail[0] == '6' ? "60" : "80", index & 0xFF, index >> 8, sub, tail + 2);
+    return std::vector<std::string>{reply};
+  };
+  const char* done = "6000000000";
+  const char* invalid_value = "8030000906";   // 0x06090030 little-endian
+  // TPDO1 (0x1800), RPDO2 (0x1401) and EMCY (0x1014, no sub-index).
+  for (const auto& [index, sub] : {std::pair{0x1800, 1}, std::pair{0x1401, 1}, std::pair{0x1014, 0}}) {
+    // A valid object cannot be moved, not even to a free id: bit 31 first.
+    EXPECT_EQ(download(index, sub, 0x1F0), answer(index, sub, invalid_value)) << std::hex << index;
+    EXPECT_EQ(download(index, sub, 0x80000000u | 0x1F0), answer(index, sub, done)) << std::hex << index;
+    for (uint32_t id : refused) {
+      EXPECT_EQ(download(index, sub, id), answer(index, sub, invalid_value)) << std::hex << index << " id " << id;
+      EXPECT_EQ(download(index, sub, 0x80000000u | id), answer(index, sub, done)) << std::hex << index << " id " << id;   // off: any id
+    }
+    for (uint32_t id : allowed) {
+      EXPECT_EQ(download(index, sub, id), answer(index, sub, done)) << std::hex << index << " id " << id;
+      EXPECT_EQ(download(index, sub, 0x80000000u | id), answer(index, sub, done)) << std::hex << index << " id " << id;
+    }
+  }
+  // Nothing the refused writes asked for reaches the bus: switched on at free ids, the objects send
+  // there, and no frame goes out on a restricted id or the SYNC's.
+  download(0x1800, 1, 0x190);
+  download(0x1014, 0, 0x0F1);
+  std::vector<std::string> frames = send("000#0100");
+  for (const char* request : {"080#", "201#0F", "080#"})   // an RPDO shorter than its mapping: EMCY 0x8210
+    for (const std::string& f : send(request)) frames.push_back(f);
+  EXPECT_NE(std::find(frames.begin(), frames.end(), "0F1#108200FF01000000"), frames.end());
+  EXPECT_EQ(std::count_if(frames.begin(), frames.end(), [](const std::string& f) { return f.rfind("190#", 0) == 0; }), 2);
+  EXPECT_EQ(std::count_if(frames.begin(), frames.end(), [](const std::string& f) { return f.rfind("181#", 0) == 0; }), 0);
+  for (const std::string& f : frames) {
+    const uint32_t id = std::stoul(f.substr(0, 3), nullptr, 16);
+    EXPECT_FALSE(is_restricted_can_id(id) || id == kSync) << f;
+  }
+}
+
+// A drive says it follows its target (statusword bit 12) only while the robot runs a motion on the
+// targets; when the motion ends with the drive still in operation enabled (another drive left),
+// bit 12 clears and the drive sends EMCY 0xFF00 (error register unchanged, no libfranka error).
+TEST_F(CanBus, DrivesLeftEnabledWhenTheMotionEndsClearBit12AndSendEmcyFF00) {
+  send("000#0100");
+  for (int cw : {0x06, 0x07}) {
+    rpdo1_all(cw, 0);
+    sync();
+  }
+  rpdo1_all(0x0F, 0);
+  sync();   // enabled; the arm has not started a motion (TestArm: motion = false)
+  for (int n = 1; n <= 7; ++n) {
+    EXPECT_TRUE(in_state(statusword_by_sdo(n), 0x6F, 0x27)) << n;
+    EXPECT_EQ(statusword_by_sdo(n) & 0x1000, 0) << n;   // enabled, but nothing acts on the target
+  }
+  arm.state.motion = true;
+  rpdo1_all(0x0F, 0);
+  sync();
+  for (int n = 1; n <= 7; ++n) EXPECT_EQ(statusword_by_sdo(n) & 0x1000, 0x1000) << n;
+  EXPECT_EQ(statusword_in(sync(), 4) & 0x1000, 0x1000);   // and the TPDO1 carries it
+  // Joint 3 leaves operation enabled (disable operation, 0x07): the robot's motion ends.
+  arm.state.motion = false;
+  rpdo1_all(0x0F, 0);
+  send("203#07000000");
+  const std::vector<std::string> frames = sync();
+  for (int n = 1; n <= 7; ++n) {
+    char emcy[32];   // code 0xFF00 little-endian, error register 0, libfranka error 0xFF (none), joint n
+    std::snprintf(emcy, sizeof emcy, "%03X#00FF00FF%02X000000", 0x80 + n, n);
+    EXPECT_EQ(std::count(frames.begin(), frames.end(), emcy), n == 3 ? 0 : 1) << emcy;
+    const int statusword = statusword_by_sdo(n);
+    EXPECT_TRUE(in_state(statusword, 0x6F, n == 3 ? 0x23 : 0x27)) << n;
+    EXPECT_EQ(statusword & 0x1000, 0) << n;
+  }
+  EXPECT_EQ(statusword_in(sync(), 4) & 0x1000, 0);
+  // Once: the next cycles send no more.
+  rpdo1_all(0x0F, 0);
+  const std::vector<std::string> later = sync();
+  EXPECT_EQ(std::count_if(later.begin(), later.end(), [](const std::string& f) { return f.rfind("08", 0) == 0; }), 0);
+}
+
 TEST_F(CanBus, ShortRpdoIsNotProcessedEmcy8210) {
   enable_all();
   EXPECT_EQ(send("201#0F"), std::vector<std::string>{"081#108200FF01000000"});

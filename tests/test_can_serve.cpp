@@ -9,6 +9,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <random>
+#include <set>
+#include <tuple>
 #include <string>
 #include <vector>
 
@@ -366,6 +369,248 @@ TEST_F(CanServe, MixedModesRunNoMotionSendEmcy6320FromEachEnabledDriveAndLogAnEr
   // And the log still replays bit for bit (replay skips events).
   const bridge::ResimulationReport replay = bridge::resimulate(log);
   EXPECT_TRUE(replay.identical()) << replay.first_difference;
+}
+
+// Issue 25, item 12: a drive that does not act on its target must not say it does. Statusword bit
+// 12 (CiA 402, CSP/CSV/CST: "drive follows the command value") is set only while the robot runs a
+// motion on the targets; when one drive leaves operation enabled mid-motion the motion ends, and
+// every drive left in operation enabled clears bit 12 and sends EMCY 0xFF00; the session log names
+// them. Frames written from the CiA 301 EMCY layout: code LE, error register, CSP's bytes.
+TEST_F(CanServe, WhenOneDriveLeavesOperationEnabledMidMotionTheOthersSayTheirTargetsAreIgnored) {
+  bus.receive(frame(kNmt, {0x01, 0x00}));
+  // A master enabling the drives one by one by SDO (as python-canopen's state setter does): six
+  // drives in operation enabled, no motion yet, so none of them says it follows its target.
+  for (int n = 1; n <= 6; ++n)
+    for (uint8_t cw : {0x06, 0x07, 0x0F}) bus.receive(frame(kSdoRx + n, {0x2B, 0x40, 0x60, 0x00, cw, 0x00, 0, 0}));
+  bus.clear_sent();
+  sync();
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_EQ(statusword(j) & 0x6F, 0x27) << "joint " << j + 1;
+    EXPECT_EQ(statusword(j) & 0x1000, 0) << "joint " << j + 1;
+  }
+  EXPECT_EQ(emcy_count(0xFF00), 0);   // never followed: nothing stopped
+  for (uint8_t cw : {0x06, 0x07, 0x0F}) bus.receive(frame(kSdoRx + 7, {0x2B, 0x40, 0x60, 0x00, cw, 0x00, 0, 0}));
+  controlword_all(0x0F);
+  ASSERT_TRUE(emulator().in_motion());
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(statusword(j) & 0x1000, 0x1000) << "joint " << j + 1;
+
+  // 0.3 N m on joint 7 (600 per mille of 500 mN m), ramped: it turns while the motion runs.
+  for (int k = 1; k <= 100; ++k) {
+    for (int n = 1; n <= 7; ++n) rpdo1(n, 0x0F, n == 7 ? static_cast<int16_t>(6 * k) : 0);
+    sync();
+  }
+  EXPECT_TRUE(emulator().in_motion()) << emulator().reflex_reason();
+  // Joint 3 leaves operation enabled (disable operation): the motion ends without a reflex.
+  bus.clear_sent();
+  for (int n = 1; n <= 7; ++n) rpdo1(n, n == 3 ? 0x07 : 0x0F, n == 7 ? 600 : 0);
+  sync();
+  EXPECT_FALSE(emulator().in_motion());
+  EXPECT_FALSE(bool(emulator().state().current_errors)) << emulator().reflex_reason();
+  const std::vector<std::string> frames = frames_sent(bus);
+  for (int n = 1; n <= 7; ++n) {
+    const std::string emcy = std::string("08") + char('0' + n) + "#00FF00FF0" + char('0' + n) + "000000";
+    EXPECT_EQ(std::count(frames.begin(), frames.end(), emcy), n == 3 ? 0 : 1) << emcy;
+    EXPECT_EQ(statusword(n - 1) & 0x6F, n == 3 ? 0x23 : 0x27) << "joint " << n;   // the six stay enabled
+    EXPECT_EQ(statusword(n - 1) & 0x1000, 0) << "joint " << n;                    // and say the target is ignored
+  }
+  // The torque on joint 7 is ignored from now on, and its drive keeps saying so; no more EMCYs.
+  bus.clear_sent();
+  for (int k = 0; k < 100; ++k) {
+    for (int n = 1; n <= 7; ++n) rpdo1(n, n == 3 ? 0x07 : 0x0F, n == 7 ? 600 : 0);
+    sync();
+  }
+  EXPECT_FALSE(emulator().in_motion());
+  EXPECT_EQ(statusword(6) & 0x1000, 0);
+  EXPECT_EQ(emcy_count(0xFF00), 0);
+  EXPECT_EQ(arm.arm.counters().abandoned_motions, 1u);
+  EXPECT_EQ(arm.arm.counters().ignored_cycles, 1u + 101u);   // the six alone before, and since
+
+  // Joint 3 enabled again: a new motion, and every drive follows its target again.
+  for (int n = 1; n <= 7; ++n) rpdo1(n, 0x0F, 0);
+  sync();
+  ASSERT_TRUE(emulator().in_motion()) << emulator().reflex_reason();
+  EXPECT_EQ(arm.arm.counters().motions, 2u);
+  for (int j = 0; j < 7; ++j) EXPECT_EQ(statusword(j) & 0x1000, 0x1000) << "joint " << j + 1;
+
+  // The session log says what happened, naming the drive that left and the ones left enabled.
+  arm.arm.log()->flush();
+  std::vector<std::string> errors;
+  for (const std::string& text : logged_events(log))
+    if (text.rfind("error: ", 0) == 0) errors.push_back(text);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("joint 3 left operation enabled: the motion ended; joints 1, 2, 4, 5, 6, 7 stay in operation enabled "
+                           "with their targets ignored (statusword bit 12 clear, EMCY 0xFF00 from each)"),
+            std::string::npos)
+      << errors[0];
+  const bridge::ResimulationReport replay = bridge::resimulate(log);
+  EXPECT_TRUE(replay.identical()) << replay.first_difference;
+}
+
+// The stateful fuzz of tests/can_vcan (master.py fuzz) in process, so that it runs in every build,
+// the sanitized one too: random NMT commands, COB-ID writes (restricted, SYNC, free, defaults, bit
+// 31 on or off), PDO remaps, controlwords, modes and cycles with RPDO1s, in front of the real
+// robot. After each step: no frame on a restricted CAN-ID or the SYNC's, every frame on an id in
+// use; a COB-ID write accepted exactly when CiA 301 allows it; statusword bit 12 only in
+// operation enabled, and after a cycle exactly when the robot runs a motion; a drive losing it
+// while it stays enabled sends EMCY 0xFF00.
+TEST(CanServeFuzz, RandomStatefulSequencesKeepTheInvariants) {
+  RecordingArm arm("");
+  DriveBus bus{BusSettings{}, arm};
+  const rt::Emulator& emulator = arm.arm.server().emulator();
+  std::mt19937 rng(20261129);
+  const auto pick = [&](int n) { return static_cast<int>(rng() % static_cast<unsigned>(n)); };
+  // A node's COB-ID objects and their default function codes (+ node id).
+  const std::vector<std::array<uint32_t, 3>> objects{{0x1014, 0, 0x080}, {0x1400, 1, 0x200}, {0x1401, 1, 0x300}, {0x1402, 1, 0x400},
+                                                     {0x1403, 1, 0x500}, {0x1800, 1, 0x180}, {0x1801, 1, 0x280}};
+  std::array<std::array<uint32_t, 7>, 8> cob{};   // [node][object]
+  std::array<bool, 8> operational{}, followed{};
+  std::array<uint16_t, 8> controlword{};
+  const auto reset_model = [&](int n) {
+    for (std::size_t o = 0; o < objects.size(); ++o) cob[n][o] = objects[o][2] + static_cast<uint32_t>(n);
+    operational[n] = false;
+  };
+  for (int n = 1; n <= 7; ++n) reset_model(n), controlword[n] = 0x0F;
+  bus.receive(frame(kNmt, {0x01, 0x00}));
+  for (int n = 1; n <= 7; ++n) operational[n] = true;
+  const auto ids_in_use = [&] {
+    std::set<uint32_t> ids;
+    for (int n = 1; n <= 7; ++n) {
+      ids.insert(0x580 + n), ids.insert(0x700 + n);
+      for (std::size_t o : {0u, 5u, 6u})   // EMCY, TPDO1, TPDO2: what a drive sends on
+        if (!(cob[n][o] & kCobIdInvalid)) ids.insert(cob[n][o] & 0x7FF);
+    }
+    return ids;
+  };
+  std::vector<Frame> step_frames;
+  const auto receive = [&](const Frame& f) {
+    bus.clear_sent();
+    bus.receive(f);
+    step_frames.insert(step_frames.end(), bus.sent().begin(), bus.sent().end());
+  };
+  // Expedited SDO download; the abort code or 0.
+  const auto download = [&](int node, uint16_t index, uint8_t sub, uint32_t value, int size) {
+    receive(frame(kSdoRx + node, {uint8_t(0x23 | (4 - size) << 2), uint8_t(index), uint8_t(index >> 8), sub, uint8_t(value),
+                                  uint8_t(value >> 8), uint8_t(value >> 16), uint8_t(value >> 24)}));
+    const Frame& answer = step_frames.back();
+    EXPECT_EQ(answer.id, kSdoRx - 0x80 + node);
+    return answer.data[0] == 0x80 ? static_cast<uint32_t>(get_le(&answer.data[4], 4)) : 0u;
+  };
+  const std::vector<uint32_t> restricted{0x000, 0x001, 0x07F, 0x101, 0x180, 0x581, 0x5FF, 0x601, 0x67F, 0x6E0, 0x6FF, 0x701, 0x77F, 0x780, 0x7FF};
+  int accepted_cob_writes = 0, refused_cob_writes = 0, motions_seen = 0, targets_ignored = 0;
+  std::set<uint32_t> ids_before = ids_in_use();
+  for (int step = 0; step < 2000; ++step) {
+    step_frames.clear();
+    const int kind = pick(16);
+    bool cycles = false;
+    if (kind == 0) {   // NMT: start, pre-operational, stop then start, reset node, reset communication
+      const uint8_t command = std::array<uint8_t, 6>{0x01, 0x01, 0x80, 0x02, 0x81, 0x82}[pick(6)];
+      const int node = pick(8);
+      receive(frame(kNmt, {command, uint8_t(node)}));
+      if (command == 0x02) receive(frame(kNmt, {0x01, uint8_t(node)}));
+      for (int n = 1; n <= 7; ++n) {
+        if (node != 0 && node != n) continue;
+        if (command == 0x81 || command == 0x82) reset_model(n);
+        else operational[n] = command != 0x80;
+      }
+    } else if (kind <= 4) {   // a COB-ID write
+      const int n = 1 + pick(7);
+      const std::size_t o = static_cast<std::size_t>(pick(7));
+      const int choice = pick(10);
+      uint32_t id = choice < 4 ? restricted[pick(static_cast<int>(restricted.size()))]
+                    : choice < 5 ? 0x080u
+                    : choice < 8 ? std::array<uint32_t, 6>{0x100, 0x190, 0x3F0, 0x580, 0x680, 0x700}[pick(6)] + static_cast<uint32_t>(pick(8))
+                                 : objects[o][2] + static_cast<uint32_t>(n);
+      const uint32_t value = id | (pick(2) ? kCobIdInvalid : 0);
+      const uint32_t current = cob[n][o];
+      id = value & 0x7FF;
+      const bool allowed = (value & kCobIdInvalid) ||
+                           (((current & kCobIdInvalid) || value == current) && !is_restricted_can_id(id) && id != kSync);
+      const uint32_t code = download(n, static_cast<uint16_t>(objects[o][0]), static_cast<uint8_t>(objects[o][1]), value, 4);
+      ASSERT_EQ(code, allowed ? 0u : 0x06090030u) << "step " << step << ": node " << n << " 0x" << std::hex << objects[o][0]
+                                                  << " from 0x" << current << " to 0x" << value;
+      if (code == 0) cob[n][o] = value;
+      ++(code == 0 ? accepted_cob_writes : refused_cob_writes);
+    } else if (kind <= 6) {   // a PDO remap, sometimes left half done
+      const int n = 1 + pick(7);
+      const std::size_t o = 1 + static_cast<std::size_t>(pick(6));
+      const uint16_t index = static_cast<uint16_t>(objects[o][0]);
+      const bool rpdo = index < 0x1800;
+      const std::vector<uint32_t> mappable = rpdo ? std::vector<uint32_t>{0x60400010, 0x60710010, 0x607A0020, 0x60FF0020, 0x60600008}
+                                                  : std::vector<uint32_t>{0x60410010, 0x60640020, 0x606C0020, 0x60610008, 0x10010008};
+      const int count = pick(4);
+      std::vector<std::tuple<uint16_t, uint8_t, uint32_t, int>> requests{{index, 1, cob[n][o] | kCobIdInvalid, 4},
+                                                                          {uint16_t(index + 0x200), 0, 0, 1}};
+      for (int i = 0; i < count; ++i) requests.emplace_back(uint16_t(index + 0x200), uint8_t(i + 1), mappable[pick(5)], 4);
+      requests.emplace_back(uint16_t(index + 0x200), 0, count, 1);
+      requests.emplace_back(index, 1, cob[n][o] & ~kCobIdInvalid, 4);
+      const std::size_t done = pick(5) == 0 ? 1 + static_cast<std::size_t>(pick(static_cast<int>(requests.size()))) : requests.size();
+      for (std::size_t r = 0; r < done; ++r) {
+        const auto [i, sub, value, size] = requests[r];
+        const uint32_t code = download(n, i, sub, value, size);
+        EXPECT_TRUE(code == 0 || code == 0x06040042 || code == 0x06090030 || code == 0x08000022) << std::hex << code;
+        if (i == index && code == 0) cob[n][o] = value;
+      }
+    } else if (kind <= 9) {   // controlwords by SDO to one drive or all: one, or the walk to operation enabled
+      const bool walk = pick(2);
+      const std::vector<uint16_t> words = walk ? std::vector<uint16_t>{0x00, 0x80, 0x06, 0x07, 0x0F}
+                                               : std::vector<uint16_t>{std::array<uint16_t, 8>{0x06, 0x07, 0x0F, 0x0F, 0x0F, 0x00, 0x02, 0x80}[pick(8)]};
+      const int only = pick(walk ? 4 : 2) ? 0 : 1 + pick(7);
+      for (int n = 1; n <= 7; ++n) {
+        if (only != 0 && only != n) continue;
+        for (uint16_t cw : words) EXPECT_EQ(download(n, 0x6040, 0, cw, 2), 0u);
+        controlword[n] = words.back();
+      }
+    } else if (kind == 10) {   // a mode of operation
+      const int mode = std::array<int, 4>{8, 9, 10, 10}[pick(4)];
+      const int only = pick(3) == 0 ? 1 + pick(7) : 0;
+      for (int n = 1; n <= 7; ++n) {
+        if (only == 0 || only == n) {
+          EXPECT_EQ(download(n, 0x6060, 0, static_cast<uint32_t>(mode), 1), 0u);
+        }
+      }
+    } else {   // cycles: RPDO1 (controlword, zero torque) on each node's RPDO1 COB-ID, then SYNC
+      cycles = true;
+      for (int k = 1 + pick(10); k > 0; --k) {
+        for (int n = 1; n <= 7; ++n)
+          if (!(cob[n][1] & kCobIdInvalid)) receive(frame(cob[n][1] & 0x7FF, {uint8_t(controlword[n]), 0, 0, 0}));
+        receive(frame(kSync, {}));
+      }
+    }
+    // The invariants.
+    std::set<uint32_t> ids = ids_in_use();
+    ids.insert(ids_before.begin(), ids_before.end());
+    std::set<int> emcy_ff00;
+    for (const Frame& f : step_frames) {
+      const bool sdo_or_heartbeat = (f.id > 0x580 && f.id <= 0x587) || (f.id > 0x700 && f.id <= 0x707);
+      ASSERT_TRUE(f.id != kSync && (sdo_or_heartbeat || !is_restricted_can_id(f.id))) << "step " << step << ": " << to_string(f);
+      ASSERT_TRUE(ids.count(f.id)) << "step " << step << ": " << to_string(f);
+      if (f.dlc == 8 && f.data[0] == 0x00 && f.data[1] == 0xFF) emcy_ff00.insert(f.data[4]);
+    }
+    for (int n = 1; n <= 7; ++n) {
+      const int word = static_cast<int>(bus.node(n - 1).value(0x6041, 0));
+      const bool follows = word & 0x1000;
+      ASSERT_TRUE(!follows || (word & 0x6F) == 0x27) << "step " << step << ": node " << n << " statusword " << word;
+      if (cycles) {
+        // After a cycle the statusword says what the robot does: bit 12 exactly when it runs a motion
+        // and the drive is enabled.
+        ASSERT_EQ(follows, (word & 0x6F) == 0x27 && emulator.in_motion()) << "step " << step << ": node " << n;
+        if (followed[n] && !follows && (word & 0x6F) == 0x27) {
+          ASSERT_TRUE(emcy_ff00.count(n) || (cob[n][0] & kCobIdInvalid)) << "step " << step << ": node " << n << " lost bit 12 silently";
+          ++targets_ignored;
+        }
+        followed[n] = follows;
+      } else {
+        followed[n] = followed[n] && follows;
+      }
+    }
+    motions_seen += cycles && emulator.in_motion() ? 1 : 0;
+    ids_before = ids_in_use();
+  }
+  // The walk reached what it is for.
+  EXPECT_GT(accepted_cob_writes, 50);
+  EXPECT_GT(refused_cob_writes, 50);
+  EXPECT_GT(motions_seen, 20);
+  EXPECT_GT(targets_ignored, 5);
 }
 
 // The master's torque that holds the arm against gravity (the robot's own model, quantized).

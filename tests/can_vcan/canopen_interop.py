@@ -5,7 +5,9 @@ drives `csp can serve` inside the sandbox's guest kernel, run as a user runs a m
 timeouts docs/can.md gives for the guest: it reads the start pose by SDO before any SYNC,
 loads CSP's EDS, maps the PDOs by SDO as a CiA 302 master does, starts the nodes, walks the 402
 state machine with its own `state` setter, sets the modes with its `op_mode` setter and moves the
-arm in CSP and then CST mode. Its cyclic part is a master's usual cycle thread: every RPDO, then
+arm in CSP and then CST mode. On the way: a PDO on a restricted CAN-ID is refused, and when one
+drive leaves operation enabled the others say (EMCY 0xFF00, statusword bit 12) that their targets
+are ignored. Its cyclic part is a master's usual cycle thread: every RPDO, then
 one SYNC.
 
   canopen_interop.py CSP VENDOR WORK
@@ -55,6 +57,21 @@ def main(csp, vendor, work):
     # "ready" pose, joint 2 at -0.785398 rad, joint 4 at -2.356194 rad), not 0.
     ready = [0, -785398, 0, -2356194, 0, 1570796, 785398]
     check([node.sdo[0x6064].raw for node in nodes] == ready, "0x6064 by SDO before the first SYNC: the start pose in urad")
+
+    # CiA 301 7.3.5: a PDO may not be switched on at a restricted CAN-ID (NMT 0x000, SDO, heartbeat,
+    # ...) nor the SYNC's 0x080: python-canopen's SDO client gets abort 0x06090030.
+    tpdo1_cob = nodes[0].sdo[0x1800][1]
+    tpdo1_cob.raw = 0x80000181                                  # switched off first (bit 31)
+    codes = {}
+    for cob_id in (0x000, 0x080, 0x581, 0x701):
+        try:
+            tpdo1_cob.raw = cob_id
+            codes[cob_id] = None
+        except canopen.SdoAbortedError as e:
+            codes[cob_id] = e.code
+    check(set(codes.values()) == {0x06090030}, "TPDO1 on NMT, SYNC, SDO, heartbeat ids: abort 0x06090030 (%s)" %
+          {hex(k): None if v is None else hex(v) for k, v in codes.items()})
+    tpdo1_cob.raw = 0x181
 
     # PDO mapping by SDO (COB-ID invalid, count 0, entries, count, COB-ID valid).
     for node in nodes:
@@ -138,8 +155,18 @@ def main(csp, vendor, work):
         q1 = position(nodes[0])
         check(abs(q1 - (start[0] + 4000)) < 450, "CSP: joint 1 followed +4000 urad (at %+d urad)" % (q1 - start[0]))
         check(not emcy, "no EMCY during the CSP motion: %s" % emcy)
+        check(all(node.statusword & 0x1000 for node in nodes), "statusword bit 12 (the drive follows its target) on every drive during the motion")
 
-        # CST: disable operation (the motion finishes), switch the mode, enable, torque on joint 7.
+        # Joint 1 leaves operation enabled first: the motion ends, and the six drives still in
+        # operation enabled clear bit 12 and send EMCY 0xFF00 (their targets are ignored now).
+        nodes[0].state = "SWITCHED ON"
+        wait_cycles(3)
+        check(sorted(emcy) == [(n, 0xFF00) for n in range(2, 8)], "joint 1 left: EMCY 0xFF00 from drives 2-7: %s" % sorted(emcy))
+        check(all(n.state == "OPERATION ENABLED" and not n.statusword & 0x1000 for n in nodes[1:]),
+              "drives 2-7 stay in operation enabled with statusword bit 12 clear")
+        del emcy[:]
+
+        # CST: disable operation on the others too, switch the mode, enable, torque on joint 7.
         for node in nodes:
             node.state = "SWITCHED ON"
             node.op_mode = "CYCLIC SYNCHRONOUS TORQUE"

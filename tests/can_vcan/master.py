@@ -8,10 +8,14 @@ from CSP's encoder. Runs inside the sandbox's guest (bridge/can/tools/csp-can-sa
                                           the in-process emulator, RPDO silence -> EMCY + fault +
                                           recovery; the session log re-simulated by csp replay
   master.py badinput CSP WORK             wrong DLC, unknown COB-IDs, SDO errors, out-of-range
-                                          values, 1e5 frames; the cycle goes on, the log is complete
+                                          values, 1e5 frames; the cycle goes on, the log is complete;
+                                          a flood into a stopped server: dropped and late frames counted
+  master.py fuzz CSP WORK STEPS [SEED]    random stateful sequences (NMT, SDO, COB-IDs, PDO remapping,
+                                          402 transitions, modes, cycles) with invariants after each step
 """
 import math
 import os
+import random
 import re
 import signal
 import struct
@@ -26,8 +30,10 @@ TORQUE_STEP = [3e-3] * 4 + [0.5e-3] * 3      # 0x6076 = 3000 / 500 mN m, per mil
 failures = []
 
 
-def check(condition, what):
-    print(("ok    " if condition else "FAIL  ") + what, flush=True)
+def check(condition, what, quiet=False):
+    """Prints the check (a passed `quiet` one is not printed: the fuzz checks thousands)."""
+    if not (quiet and condition):
+        print(("ok    " if condition else "FAIL  ") + what, flush=True)
     if not condition:
         failures.append(what)
 
@@ -308,6 +314,16 @@ def badinput(csp, work):
     check(abort_code(1, 0x2B, 0x6072, 0, struct.pack("<H", 60000) + bytes(2)) == 0x06090031, "0x6072 max torque beyond tau_max: abort 0x06090031")
     check(abort_code(1, 0x23, 0x1000, 0, bytes(4)) == 0x06010002, "write to the const 0x1000: abort 0x06010002")
     check(abort_code(1, 0x23, 0x6040, 0, bytes(4)) == 0x06070012, "4 bytes to the U16 controlword: abort 0x06070012")
+    # CiA 301 7.3.5: no PDO or EMCY on a restricted CAN-ID or the SYNC's; a valid one is not moved.
+    cob = lambda value: struct.pack("<I", value)
+    check(abort_code(5, 0x23, 0x1800, 1, cob(0x190)) == 0x06090030, "TPDO1 moved while valid: abort 0x06090030 (set bit 31 first)")
+    check(abort_code(5, 0x23, 0x1800, 1, cob(0x80000185)) is None, "TPDO1 switched off (bit 31)")
+    refused = {cob_id: abort_code(5, 0x23, 0x1800, 1, cob(cob_id)) for cob_id in (0x000, 0x080, 0x585, 0x605, 0x705, 0x7FF)}
+    check(set(refused.values()) == {0x06090030}, "TPDO1 on NMT, SYNC, SDO, heartbeat, reserved ids: abort 0x06090030 (%s)" %
+          ", ".join("0x%03X: %s" % (i, "accepted" if c is None else "0x%08X" % c) for i, c in refused.items()))
+    check(abort_code(5, 0x23, 0x1800, 1, cob(0x185)) is None, "TPDO1 back on 0x185")
+    check(abort_code(5, 0x23, 0x1014, 0, cob(0x80000085)) is None and abort_code(5, 0x23, 0x1014, 0, cob(0x000)) == 0x06090030
+          and abort_code(5, 0x23, 0x1014, 0, cob(0x085)) is None, "EMCY: off, NMT id refused (0x06090030), back on 0x085")
 
     # An out-of-range target torque: limited to 0x6072, a jump all the same -> the robot's reflex.
     for controlword in (0x06, 0x07, 0x0F, 0x0F):
@@ -334,14 +350,290 @@ def badinput(csp, work):
         tpdos = master.cycle(rpdo1(0x0F))
     check(flood.returncode == 0, "cangen sent 1e5 frames on COB-ID 0x3FF")
     check(all(s & 0x6F == 0x27 for s in statuswords(tpdos)), "after the flood (%d cycles during it): still operation enabled" % flood_cycles)
+    # A flood into a stopped server: its socket's queue fills, the kernel drops the rest, and the
+    # report counts them (SO_RXQ_OVFL), and the queued ones as late (handled > 1 ms after they came).
+    master.cycle(rpdo1(0x07))                                  # disable operation: the motion ends, nothing is lost meanwhile
+    serve.send_signal(signal.SIGSTOP)
+    stopped_flood = subprocess.run(["cangen", "vcan0", "-I", "3FF", "-L", "8", "-D", "i", "-g", "0", "-n", "50000"])
+    while master.recv(0) is not None:                          # what the master had not read yet
+        pass
+    serve.send_signal(signal.SIGCONT)
+    # The server reads its whole queue before it next sends a heartbeat (100 ms idle): a request sent
+    # before that could find the queue still full and be dropped too.
+    heartbeat = master.wait_for(lambda m: 0x701 <= m.arbitration_id <= 0x707, timeout=120)
+    answered = heartbeat is not None and master.upload(1, 0x1000, 0) == struct.pack("<I", 0x00020192)
+    check(stopped_flood.returncode == 0 and answered, "5e4 frames into the stopped server, then it answers an SDO request")
     text = stop_serve(serve, work, "badinput")
     lost = int(text.split("lost commands ")[1].split()[0])
     ignored = int(text.split("ignored frames ")[1].split(",")[0])
+    dropped = int(re.search(r"dropped (\d+) \(receive queue full\)", text).group(1))
+    late = int(re.search(r"late (\d+) \(handled", text).group(1))
     check(lost == 0, "no command lost during the flood (lost commands %d)" % lost)
-    check(ignored >= 10000, "CSP counted %d ignored frames (the flood's 100000 and 2 unknown COB-IDs; any missing ones overflowed its socket's queue)" % ignored)
+    check(dropped > 0 and ignored + dropped == 150002,
+          "every flood frame is accounted for: %d handled (ignored) + %d dropped by the kernel (receive queue full) = 100000 + 50000 + 2 unknown" % (ignored, dropped))
+    check(late >= 1000, "frames queued while the server was stopped counted late: %d" % late)
+    check("frames dropped: the socket's receive queue was full" in text, "the report warns of the dropped frames")
+    with open(log, "rb") as f:
+        check(b"dropped %d (receive queue full)" % dropped in f.read(), "the session log has the frame counts (received, dropped, late)")
     replay = subprocess.run([csp, "replay", log], capture_output=True, text=True)
     print(replay.stdout + replay.stderr, flush=True)
     check(replay.returncode == 0 and "bit for bit" in replay.stdout, "the log of the bad-input session is complete: csp replay bit for bit")
+
+
+# --- the stateful fuzz: random sequences against the live server, invariants after each step ---
+def restricted(cob_id):
+    """CiA 301 7.3.5 "restricted CAN-IDs" (written from its table)."""
+    return (cob_id <= 0x07F or 0x101 <= cob_id <= 0x180 or 0x581 <= cob_id <= 0x5FF or 0x601 <= cob_id <= 0x67F
+            or 0x6E0 <= cob_id <= 0x6FF or cob_id >= 0x701)
+
+
+# docs/can.md's EMCY table: the communication codes, mixed modes, targets ignored, libfranka's errors.
+EMCY_CODES = {0x0000, 0x8130, 0x8210, 0x8220, 0x8240, 0x8250, 0x6320, 0xFF00} | set(range(0xFF01, 0xFF2A))
+# A node's COB-ID objects (index, sub-index) and their default function codes (+ node id, valid).
+COB_OBJECTS = {(0x1014, 0): 0x080, (0x1400, 1): 0x200, (0x1401, 1): 0x300, (0x1402, 1): 0x400,
+               (0x1403, 1): 0x500, (0x1800, 1): 0x180, (0x1801, 1): 0x280}
+TPDO_OBJECTS = [(0x1800, 1), (0x1801, 1)]
+MAPPABLE = {True: [(0x6040, 16), (0x6071, 16), (0x607A, 32), (0x60FF, 32), (0x60B2, 16), (0x6060, 8)],          # RPDO
+            False: [(0x6041, 16), (0x6064, 32), (0x606C, 32), (0x6077, 16), (0x6061, 8), (0x2001, 16), (0x1001, 8)]}
+PDO_ABORTS = {0x06040041, 0x06040042, 0x06040043, 0x06090030, 0x08000022}
+
+
+class Fuzz:
+    """A model of what the master configured (each node's COB-IDs, NMT state), random steps, and
+    the invariants: no frame from CSP on a restricted CAN-ID or the SYNC's, every frame on an id
+    the model says is in use, EMCY codes documented; a COB-ID write accepted exactly when CiA 301
+    allows it; every SYNC answered by the TPDOs in use; statusword bit 12 ("follows the target")
+    only in operation enabled, after a cycle only with all seven enabled in one mode, and a drive
+    that loses it while staying enabled sends EMCY 0xFF00."""
+
+    def __init__(self, master, rng):
+        self.m, self.rng = master, rng
+        self.frames = []
+        self.cob = {}
+        self.nmt = {}
+        self.cw = {n: 0x0F for n in NODES}
+        self.followed = {n: False for n in NODES}
+        for n in NODES:
+            self.reset_node_model(n)
+        self.ids_before = self.ids_in_use()
+
+    def reset_node_model(self, n):
+        for key, function in COB_OBJECTS.items():
+            self.cob[(n,) + key] = function + n
+        self.nmt[n] = "pre"
+
+    def recv_all(self, timeout):
+        msg = self.m.recv(timeout)
+        while msg is not None:
+            self.frames.append(msg)
+            msg = self.m.recv(0)
+
+    def ids_in_use(self):
+        ids = {0x580 + n for n in NODES} | {0x700 + n for n in NODES}
+        for (n, index, sub), value in self.cob.items():
+            if not value & 0x80000000 and (index == 0x1014 or index >= 0x1800):
+                ids.add(value & 0x7FF)
+        return ids
+
+    def sdo(self, node, index, sub, value, size):
+        """Expedited download; the abort code or None. Frames seen meanwhile are kept."""
+        command = 0x23 | (4 - size) << 2
+        self.m.send(0x600 + node, struct.pack("<BHB", command, index, sub) + value.to_bytes(4, "little"))
+        return self.sdo_answer(node)
+
+    def sdo_answer(self, node):
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline:
+            msg = self.m.recv(max(0.0, deadline - time.monotonic()))
+            if msg is None:
+                continue
+            self.frames.append(msg)
+            if msg.arbitration_id == 0x580 + node:
+                data = bytes(msg.data)
+                return struct.unpack_from("<I", data, 4)[0] if data[0] == 0x80 else None
+        raise TimeoutError("no SDO answer from node %d" % node)
+
+    def upload16(self, node, index):
+        self.m.send(0x600 + node, struct.pack("<BHB4x", 0x40, index, 0))
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline:
+            msg = self.m.recv(max(0.0, deadline - time.monotonic()))
+            if msg is None:
+                continue
+            self.frames.append(msg)
+            if msg.arbitration_id == 0x580 + node:
+                return struct.unpack_from("<H", bytes(msg.data), 4)[0] if msg.data[0] != 0x80 else None
+        raise TimeoutError("no SDO answer from node %d" % node)
+
+    # --- steps
+    def step_nmt(self):
+        command = self.rng.choice([0x01, 0x01, 0x80, 0x02, 0x81, 0x82])
+        node = self.rng.choice([0] + list(NODES))
+        targets = list(NODES) if node == 0 else [node]
+        self.m.send(0x000, [command, node])
+        if command in (0x81, 0x82):                       # boot-up, then pre-operational
+            booted = set()
+            deadline = time.monotonic() + 5
+            while booted != set(targets) and time.monotonic() < deadline:
+                msg = self.m.recv(0.1)
+                if msg is not None:
+                    self.frames.append(msg)
+                    if msg.arbitration_id - 0x700 in targets and bytes(msg.data) == b"\x00":
+                        booted.add(msg.arbitration_id - 0x700)
+            check(booted == set(targets), "fuzz: NMT reset 0x%02X of node %d: boot-up from %s" % (command, node, sorted(booted)), quiet=True)
+            for n in targets:
+                self.reset_node_model(n)                  # both restore the COB-IDs (0x1000-0x1FFF)
+        else:
+            for n in targets:
+                self.nmt[n] = {0x01: "op", 0x80: "pre", 0x02: "stopped"}[command]
+        if command == 0x02:                               # stopped answers no SDO: back to operational
+            self.m.send(0x000, [0x01, node])
+            for n in targets:
+                self.nmt[n] = "op"
+
+    def cob_value(self, n, key):
+        choice = self.rng.random()
+        if choice < 0.4:
+            cob_id = self.rng.choice([0x000, 0x001, 0x07F, 0x080, 0x101, 0x180, 0x581, 0x5FF, 0x601, 0x67F,
+                                      0x6E0, 0x6FF, 0x701, 0x77F, 0x780, 0x7FF])
+        elif choice < 0.8:
+            cob_id = self.rng.choice([0x100, 0x190 + n, 0x1F0 + n, 0x3F0 + n, 0x580, 0x600, 0x680 + n, 0x6D0 + n, 0x700])
+        else:
+            cob_id = COB_OBJECTS[key] + n
+        return cob_id | (0x80000000 if self.rng.random() < 0.5 else 0)
+
+    def step_cob(self):
+        n = self.rng.choice(list(NODES))
+        key = self.rng.choice(list(COB_OBJECTS))
+        value = self.cob_value(n, key)
+        current = self.cob[(n,) + key]
+        cob_id = value & 0x7FF
+        allowed = bool(value & 0x80000000) or ((current & 0x80000000 or value == current)
+                                               and not restricted(cob_id) and cob_id != 0x080)
+        code = self.sdo(n, key[0], key[1], value, 4)
+        check((code is None) == allowed and code in (None, 0x06090030),
+              "fuzz: node %d 0x%04X:%d 0x%03X -> 0x%08X (was 0x%08X): %s, CiA 301 says %s" %
+              (n, key[0], key[1], cob_id, value, current, "accepted" if code is None else "abort 0x%08X" % code,
+               "accept" if allowed else "refuse"), quiet=True)
+        if code is None:
+            self.cob[(n,) + key] = value
+
+    def step_remap(self):
+        n = self.rng.choice(list(NODES))
+        key = self.rng.choice([k for k in COB_OBJECTS if k[0] != 0x1014])
+        receive = key[0] < 0x1800
+        current = self.cob[(n,) + key]
+        entries = [self.rng.choice(MAPPABLE[receive]) for _ in range(self.rng.randint(0, 3))]
+        stop_after = self.rng.randint(1, 5) if self.rng.random() < 0.2 else 99
+        requests = [(key[0], 1, current | 0x80000000, 4), (key[0] + 0x200, 0, 0, 1)]
+        requests += [(key[0] + 0x200, i + 1, index << 16 | bits, 4) for i, (index, bits) in enumerate(entries)]
+        requests += [(key[0] + 0x200, 0, len(entries), 1), (key[0], 1, current & 0x7FFFFFFF, 4)]
+        for i, (index, sub, value, size) in enumerate(requests[:stop_after]):
+            code = self.sdo(n, index, sub, value, size)
+            check(code is None or code in PDO_ABORTS, "fuzz: remap node %d 0x%04X:%d = 0x%X: %s" %
+                  (n, index, sub, value, "ok" if code is None else "abort 0x%08X" % code), quiet=True)
+            if index == key[0] and code is None:
+                self.cob[(n,) + key] = value
+
+    def step_controlword(self):
+        cw = self.rng.choice([0x06, 0x07, 0x0F, 0x0F, 0x0F, 0x00, 0x02, 0x80])
+        targets = list(NODES) if self.rng.random() < 0.5 else [self.rng.choice(list(NODES))]
+        for n in targets:
+            self.cw[n] = cw
+            check(self.sdo(n, 0x6040, 0, cw, 2) is None, "fuzz: controlword 0x%02X to node %d" % (cw, n), quiet=True)
+
+    def step_mode(self):
+        mode = self.rng.choice([8, 9, 10, 10, 3])
+        targets = list(NODES) if self.rng.random() < 0.7 else [self.rng.choice(list(NODES))]
+        for n in targets:
+            code = self.sdo(n, 0x6060, 0, mode, 1)
+            check((code is None) == (mode != 3), "fuzz: mode %d to node %d: %s" % (mode, n, code), quiet=True)
+
+    def step_cycles(self):
+        for _ in range(self.rng.randint(1, 25)):
+            expected = {}
+            for n in NODES:
+                if self.nmt[n] != "op":
+                    continue
+                rpdo1 = self.cob[(n, 0x1400, 1)]
+                if not rpdo1 & 0x80000000:
+                    self.m.send(rpdo1 & 0x7FF, struct.pack("<Hh", self.cw[n], 0))
+                for key in TPDO_OBJECTS:
+                    value = self.cob[(n,) + key]
+                    if not value & 0x80000000:
+                        expected[value & 0x7FF] = expected.get(value & 0x7FF, 0) + 1
+            self.m.send(0x080)
+            got = {}
+            deadline = time.monotonic() + 10
+            while any(got.get(i, 0) < c for i, c in expected.items()) and time.monotonic() < deadline:
+                msg = self.m.recv(max(0.0, deadline - time.monotonic()))
+                if msg is not None:
+                    self.frames.append(msg)
+                    got[msg.arbitration_id] = got.get(msg.arbitration_id, 0) + 1
+            check(all(got.get(i, 0) >= c for i, c in expected.items()),
+                  "fuzz: SYNC answered by the TPDOs in use %s (got %s)" % (expected, got), quiet=True)
+
+    # --- invariants
+    def check_step(self, name, after_cycles):
+        self.recv_all(0.02)
+        ids = self.ids_in_use() | self.ids_before
+        for msg in self.frames:
+            cob_id, data = msg.arbitration_id, bytes(msg.data)
+            ours = cob_id in (0x580 + n for n in NODES) or cob_id in (0x700 + n for n in NODES)
+            check(cob_id != 0x080 and (ours or not restricted(cob_id)),
+                  "fuzz %s: frame on a restricted id or the SYNC's: %03X#%s" % (name, cob_id, data.hex()), quiet=True)
+            check(cob_id in ids, "fuzz %s: frame on an id nothing uses: %03X#%s (in use: %s)" %
+                  (name, cob_id, data.hex(), sorted(map(hex, ids))), quiet=True)
+            for n in NODES:
+                emcy = self.cob[(n, 0x1014, 0)]
+                if not emcy & 0x80000000 and cob_id == emcy & 0x7FF and len(data) == 8 and data[4] == n:
+                    code = data[0] | data[1] << 8
+                    check(code in EMCY_CODES, "fuzz %s: EMCY 0x%04X of node %d is documented" % (name, code, n), quiet=True)
+        emcy_ff00 = {bytes(m.data)[4] for m in self.frames if len(m.data) == 8 and bytes(m.data)[:2] == b"\x00\xFF"}
+        words = {n: self.upload16(n, 0x6041) for n in NODES}
+        modes = {n: self.upload16(n, 0x6061) & 0xFF for n in NODES} if after_cycles else {}
+        for n, word in words.items():
+            followed = bool(word & 0x1000)
+            check(not followed or word & 0x6F == 0x27, "fuzz %s: bit 12 only in operation enabled (node %d: 0x%04X)" % (name, n, word), quiet=True)
+            if after_cycles:
+                check(not followed or (all(w & 0x6F == 0x27 for w in words.values()) and len(set(modes.values())) == 1),
+                      "fuzz %s: bit 12 of node %d with all seven enabled in one mode (%s, modes %s)" %
+                      (name, n, ["0x%04X" % w for w in words.values()], modes), quiet=True)
+                if self.followed[n] and not followed and word & 0x6F == 0x27:
+                    check(n in emcy_ff00, "fuzz %s: node %d stays enabled with its target no longer followed: EMCY 0xFF00" % (name, n), quiet=True)
+            self.followed[n] = followed if after_cycles else self.followed[n] and followed
+        self.frames = []
+        self.ids_before = self.ids_in_use()
+
+
+def fuzz(csp, work, steps, seed):
+    seed = int(seed) if seed else int(time.time())
+    print("fuzz: seed %d (master.py fuzz CSP WORK %s %d repeats this run)" % (seed, steps, seed), flush=True)
+    rng = random.Random(seed)
+    master = Master()
+    log = os.path.join(work, "fuzz.lcmlog")
+    serve = boot(master, csp, work, "fuzz", "--log", log)
+    f = Fuzz(master, rng)
+    master.send(0x000, [0x01, 0x00])
+    for n in NODES:
+        f.nmt[n] = "op"
+    kinds = [("nmt", f.step_nmt, 1), ("cob", f.step_cob, 4), ("remap", f.step_remap, 2),
+             ("controlword", f.step_controlword, 3), ("mode", f.step_mode, 1), ("cycles", f.step_cycles, 5)]
+    counts = {name: 0 for name, _, _ in kinds}
+    failed_before = len(failures)
+    started = time.monotonic()
+    done = 0
+    while done < int(steps) and time.monotonic() - started < 25 and len(failures) == failed_before:
+        name, run, _ = rng.choices(kinds, weights=[w for _, _, w in kinds])[0]
+        run()
+        f.check_step("step %d (%s)" % (done, name), name == "cycles")
+        counts[name] += 1
+        done += 1
+    check(len(failures) == failed_before, "fuzz: %d steps in %.0f s, invariants held after each (%s)" %
+          (done, time.monotonic() - started, counts))
+    stop_serve(serve, work, "fuzz")
+    replay = subprocess.run([csp, "replay", log], capture_output=True, text=True)
+    check(replay.returncode == 0 and "bit for bit" in replay.stdout, "fuzz: the session log re-simulates bit for bit")
 
 
 def busload(work):
@@ -417,6 +709,8 @@ def main():
         session(*sys.argv[2:5])
     elif command == "badinput":
         badinput(*sys.argv[2:4])
+    elif command == "fuzz":
+        fuzz(sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5] if len(sys.argv) > 5 else None)
     elif command == "busload":
         busload(sys.argv[2])
     elif command == "master-frames":

@@ -60,8 +60,11 @@ settled "$W/replay.candump"
 kill $dump
 $PY "$M" replay-compare "$W" || fail "replay"
 
-part "bad input on the live bus: wrong DLC, unknown COB-IDs, SDO errors, out-of-range target, 1e5 frames"
+part "bad input on the live bus: wrong DLC, unknown COB-IDs, SDO errors, restricted COB-IDs, out-of-range target, 1e5 frames, a flood into a stopped server"
 $PY "$M" badinput "$CSP_BIN" "$W" || fail "bad input"
+
+part "stateful fuzz: random NMT, SDO, COB-IDs, PDO remapping, 402 transitions, modes and cycles, invariants after each step"
+$PY "$M" fuzz "$CSP_BIN" "$W" 400 || fail "fuzz"
 
 part "csp-can-sandbox: candump as the master sees the drives' heartbeats; the master's exit code comes back"
 sandbox candump -- sh -c 'candump -L -n 14 vcan0 > "$0" && exit 3' "$W/candump-master.out"

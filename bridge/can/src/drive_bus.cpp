@@ -16,7 +16,7 @@ DriveBus::DriveBus(const BusSettings& settings, Arm& arm) : arm_(arm) {
     nodes_.emplace_back(id, settings.drives[j], settings.identity, out_);
   }
   const ArmState initial = arm.measured();
-  for (int j = 0; j < kJoints; ++j) nodes_[j].update(initial.joints[j], initial.errors, initial.mixed_modes);
+  for (int j = 0; j < kJoints; ++j) nodes_[j].update(initial.joints[j], initial.errors, initial.mixed_modes, initial.motion);
 }
 
 void DriveBus::receive(const Frame& frame) {
@@ -90,7 +90,7 @@ void DriveBus::cycle_without_sync() {
 
 void DriveBus::run_arm() {
   const ArmState state = arm_.cycle(command_);
-  for (int j = 0; j < kJoints; ++j) nodes_[j].update(state.joints[j], state.errors, state.mixed_modes);
+  for (int j = 0; j < kJoints; ++j) nodes_[j].update(state.joints[j], state.errors, state.mixed_modes, state.motion);
 }
 
 void DriveBus::elapse(uint32_t microseconds) {

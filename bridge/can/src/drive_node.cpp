@@ -65,6 +65,7 @@ void DriveNode::reset(bool communication_only) {
     recovery_requested_ = false;
     received_since_sync_ = false;
     mixed_modes_reported_ = false;
+    followed_ = false;
     set_state(next_state(DriveState::kNotReadyToSwitchOn, 0, 0, 0));   // self-test done: switch on disabled
   }
   nmt_.boot_up();
@@ -94,6 +95,11 @@ uint32_t DriveNode::write(int slot, int64_t value) {
   if (value < e.low) return abort::kValueTooLow;
   if (value > e.high) return abort::kValueTooHigh;
   if (const uint32_t code = pdos_.check_parameter(slot, value); code != 0) return code;
+  if (e.index == od::kCobIdEmcy) {
+    const uint32_t sync_cob_id = static_cast<uint32_t>(values_[values_.slot(od::kCobIdSync, 0)]);
+    if (const uint32_t code = check_cob_id(static_cast<uint32_t>(values_[slot]), static_cast<uint32_t>(value), sync_cob_id); code != 0)
+      return code;
+  }
   store(slot, value);
   return 0;
 }
@@ -129,10 +135,10 @@ void DriveNode::set_controlword(uint16_t controlword) {
 
 void DriveNode::set_state(DriveState state) {
   state_ = state;
-  const bool following = state == DriveState::kOperationEnabled;
+  if (state != DriveState::kOperationEnabled) followed_ = false;   // enabled again, it waits for the robot's word
   values_[s_.statusword] = statusword_state_bits(state) | 0x0200   // bit 9 remote: the controlword is obeyed
                            | (torque_limited_ ? 0x0800 : 0)          // bit 11 internal limit active
-                           | (following ? 0x1000 : 0);               // bit 12: the drive follows the target
+                           | (followed_ ? 0x1000 : 0);               // bit 12: the drive follows the target
 }
 
 bool DriveNode::take_recovery_request() {
@@ -167,7 +173,7 @@ void DriveNode::write_measurement() {
   values_[s_.tau_ext] = to_raw(m.tau_ext_hat_filtered, torque_step, INT16_MIN, INT16_MAX);
 }
 
-void DriveNode::update(const JointMeasurement& m, const rt::ErrorSet& errors, bool mixed_modes) {
+void DriveNode::update(const JointMeasurement& m, const rt::ErrorSet& errors, bool mixed_modes, bool motion) {
   measured_ = m;
   write_measurement();
   const bool in_mix = mixed_modes && state_ == DriveState::kOperationEnabled;
@@ -188,6 +194,11 @@ void DriveNode::update(const JointMeasurement& m, const rt::ErrorSet& errors, bo
       first = false;
     }
   }
+  // After a reflex the drive is in fault; otherwise the robot either acts on its targets or, if it
+  // did until now, says that it stopped.
+  const bool followed = state_ == DriveState::kOperationEnabled && motion;
+  if (followed_ && !followed && state_ == DriveState::kOperationEnabled) emcy_.send(kEmcyTargetIgnored);
+  followed_ = followed;
   set_state(state_);   // refresh the statusword's bits
 }
 

@@ -11,6 +11,16 @@ bool is_communication_parameter(uint16_t index) { return (index & 0xFE00) == 0x1
 bool is_mapping_parameter(uint16_t index) { return (index & 0xFE00) == 0x1600 || (index & 0xFE00) == 0x1A00; }
 }  // namespace
 
+uint32_t check_cob_id(uint32_t current, uint32_t value, uint32_t sync_cob_id) {
+  const bool on = (value & kCobIdInvalid) == 0;
+  if (!on) return 0;   // switching off (or staying off) is always allowed
+  const uint32_t id = value & 0x7FF;
+  if ((value & 0x3FFFF800u) != 0) return abort::kInvalidValue;                        // 11-bit ids only
+  if ((current & kCobIdInvalid) == 0 && value != current) return abort::kInvalidValue;  // moved while valid
+  if (is_restricted_can_id(id) || id == (sync_cob_id & 0x7FF)) return abort::kInvalidValue;
+  return 0;
+}
+
 PdoService::PdoService(const ObjectValues& values, ObjectWriter& writer, const NmtSlave& nmt, EmcyProducer& emcy,
                        std::vector<Frame>& out)
     : values_(values), writer_(writer), nmt_(nmt), emcy_(emcy), out_(out) {
@@ -56,12 +66,9 @@ uint32_t PdoService::check_parameter(int slot, int64_t value) const {
   const uint16_t communication_index = communication ? e.index : static_cast<uint16_t>(e.index - 0x200);
   const Pdo& pdo = *std::find_if(pdos_.begin(), pdos_.end(),
                                  [&](const Pdo& p) { return p.communication_index == communication_index; });
-  if (communication && e.subindex == 1) {
-    const uint32_t id = static_cast<uint32_t>(value);
-    if ((id & kCobIdInvalid) == 0 && (id & 0x3FFFF800u) != 0) return abort::kInvalidValue;   // 11-bit ids only
-    if (valid(pdo) && (id & kCobIdInvalid) == 0 && id != cob_id(pdo)) return abort::kInvalidValue;
-    return 0;
-  }
+  if (communication && e.subindex == 1)
+    return check_cob_id(cob_id(pdo), static_cast<uint32_t>(value),
+                        static_cast<uint32_t>(values_[values_.slot(od::kCobIdSync, 0)]));
   if (communication && e.subindex == 2) {
     const bool synchronous = pdo.receive ? value <= 240 : value >= 1 && value <= 240;
     return synchronous || (pdo.receive && value >= 254) ? 0 : abort::kInvalidValue;

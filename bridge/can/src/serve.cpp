@@ -268,6 +268,16 @@ CanServeReport serve(rt::Emulator& robot, const rt::Scenario& scenario, const Ca
   report.server = session.arm().server().counters();
   report.emulator = session.arm().server().emulator().counters();
   report.last_reflex = session.arm().server().emulator().reflex_reason();
+  for (const InterfaceReport& i : report.interfaces) {
+    const SocketCounters& c = i.socket;
+    if (c.dropped > 0)
+      report.timing.warnings.push_back(i.name + ": " + std::to_string(c.dropped) +
+                                       " frames dropped: the socket's receive queue was full (the kernel's SO_RXQ_OVFL count); the drives never saw them");
+    // The session log says what reached the drives, for every interface.
+    session.arm().log_event("can: " + i.name + ": received " + std::to_string(c.received) + " frames, dropped " +
+                            std::to_string(c.dropped) + " (receive queue full), late " + std::to_string(c.late) +
+                            " (handled more than 1 ms after they came), sent " + std::to_string(c.sent));
+  }
   for (InterfaceReport& i : report.interfaces) {
     if (session.syncs_marked() < 2) continue;
     const double seconds = static_cast<double>(session.syncs_marked() - 1) * rt::kDeltaT;

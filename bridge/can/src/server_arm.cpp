@@ -24,6 +24,14 @@ const char* mode_abbreviation(int8_t mode) {
   }
 }
 
+// "joints 2, 3, 7": the joints whose operation_enabled is `enabled`.
+std::string joints_where(const ArmCommand& command, bool enabled) {
+  std::string text;
+  for (int j = 0; j < kJoints; ++j)
+    if (command.joints[j].operation_enabled == enabled) text += (text.empty() ? "" : ", ") + std::to_string(j + 1);
+  return (text.find(',') == std::string::npos ? "joint " : "joints ") + text;
+}
+
 // "joint 1 CST, 2 CST, 7 CSP": the enabled joints and their modes.
 std::string enabled_modes(const ArmCommand& command) {
   std::string text;
@@ -78,14 +86,17 @@ void ServerArm::log_state() {
 }
 
 // The server's event record (what RobotServer writes for its own events); replay skips events.
+void ServerArm::log_event(const std::string& text) {
+  if (!log_) return;
+  event_t e;
+  e.utime = bridge::now_utime();
+  e.time = server_.message_id();
+  e.text = text;
+  log_->write(channels_.event, bridge::encode(e), e.utime);
+}
+
 void ServerArm::log_error(const std::string& text) {
-  if (log_) {
-    event_t e;
-    e.utime = bridge::now_utime();
-    e.time = server_.message_id();
-    e.text = "error: " + text;
-    log_->write(channels_.event, bridge::encode(e), e.utime);
-  }
+  log_event("error: " + text);
   diagnostic_("error: " + text);
 }
 
@@ -149,6 +160,14 @@ ArmState ServerArm::cycle(const ArmCommand& command) {
       rt::Command finish = last_command_;   // the master stopped the motion: libfranka's MotionFinished
       finish.motion_finished = true;
       send_command(session, finish);
+      if (enabled_mode && !mixed) {   // drives stay in operation enabled with nothing acting on their targets (a mix has its own event)
+        ++counters_.abandoned_motions;
+        const std::string cause = all_enabled ? "the drives changed their mode of operation"
+                                              : joints_where(command, false) + " left operation enabled";
+        log_error(cause + ": the motion ended; " + joints_where(command, true) +
+                  " stay in operation enabled with their targets ignored (statusword bit 12 clear, EMCY 0xFF00 from each) "
+                  "until all seven drives enter operation enabled in one mode again");
+      }
     } else if (command.complete) {
       send_command(session, command_values(session, command));
     }
@@ -157,6 +176,8 @@ ArmState ServerArm::cycle(const ArmCommand& command) {
   log_state();
   ArmState state = measured();
   state.mixed_modes = mixed;
+  state.motion = mode && server_.in_session() && *server_.session() == *mode;
+  if (enabled_mode && !state.motion) ++counters_.ignored_cycles;
   return state;
 }
 

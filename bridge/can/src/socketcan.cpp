@@ -11,6 +11,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -47,6 +48,11 @@ SocketCan::SocketCan(const std::string& interface) : interface_(interface) {
   const int queue_bytes = 8 << 20;
   if (setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &queue_bytes, sizeof queue_bytes) != 0)
     setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &queue_bytes, sizeof queue_bytes);
+  // Frames lost to a full queue anyway are counted (the kernel's drop count with every frame), and
+  // each frame carries its receive time.
+  const int on = 1;
+  setsockopt(fd_, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on);
+  setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
   sockaddr_can address{};
   address.can_family = AF_CAN;
   address.can_ifindex = static_cast<int>(index);
@@ -81,22 +87,49 @@ bool SocketCan::send(const Frame& frame) {
   return false;
 }
 
+namespace {
+int64_t realtime_ns() {
+  timespec now{};
+  clock_gettime(CLOCK_REALTIME, &now);
+  return int64_t{now.tv_sec} * 1'000'000'000 + now.tv_nsec;
+}
+}  // namespace
+
 std::optional<Frame> SocketCan::receive() {
   while (next_ == batch_.size()) {
     can_frame raw[kBatch];
     iovec io[kBatch];
     mmsghdr messages[kBatch];
+    // Room for the two ancillary items of each frame: the drop count and the receive time.
+    struct Control {
+      alignas(cmsghdr) char bytes[CMSG_SPACE(sizeof(uint32_t)) + CMSG_SPACE(sizeof(timespec))];
+    } control[kBatch];
     for (int i = 0; i < kBatch; ++i) {
       io[i] = iovec{&raw[i], sizeof raw[i]};
       messages[i] = mmsghdr{};
       messages[i].msg_hdr.msg_iov = &io[i];
       messages[i].msg_hdr.msg_iovlen = 1;
+      messages[i].msg_hdr.msg_control = control[i].bytes;
+      messages[i].msg_hdr.msg_controllen = sizeof control[i].bytes;
     }
     const int n = recvmmsg(fd_, messages, kBatch, MSG_DONTWAIT, nullptr);
     if (n <= 0) return std::nullopt;
     batch_.clear();
     next_ = 0;
     for (int i = 0; i < n; ++i) {
+      int64_t kernel_ns = 0;
+      for (cmsghdr* c = CMSG_FIRSTHDR(&messages[i].msg_hdr); c; c = CMSG_NXTHDR(&messages[i].msg_hdr, c)) {
+        if (c->cmsg_level != SOL_SOCKET) continue;
+        if (c->cmsg_type == SO_RXQ_OVFL) {
+          uint32_t drops = 0;   // the socket's drops so far, when this frame was queued
+          std::memcpy(&drops, CMSG_DATA(c), sizeof drops);
+          counters_.dropped = std::max<uint64_t>(counters_.dropped, drops);
+        } else if (c->cmsg_type == SCM_TIMESTAMPNS) {
+          timespec t{};
+          std::memcpy(&t, CMSG_DATA(c), sizeof t);
+          kernel_ns = int64_t{t.tv_sec} * 1'000'000'000 + t.tv_nsec;
+        }
+      }
       const can_frame& r = raw[i];
       if (messages[i].msg_len != sizeof r || (r.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_ERR_FLAG)) || r.can_dlc > 8) {
         ++counters_.skipped;
@@ -106,11 +139,13 @@ std::optional<Frame> SocketCan::receive() {
       frame.id = r.can_id & CAN_SFF_MASK;
       frame.dlc = r.can_dlc;
       std::memcpy(frame.data.data(), r.data, 8);
-      batch_.push_back(frame);
+      batch_.push_back({frame, kernel_ns});
     }
   }
   ++counters_.received;
-  return batch_[next_++];
+  const Received& r = batch_[next_++];
+  if (r.kernel_ns != 0 && realtime_ns() - r.kernel_ns > kLateFrameNs) ++counters_.late;
+  return r.frame;
 }
 
 bool wait_readable(const std::vector<SocketCan*>& sockets, int64_t timeout_ns) {

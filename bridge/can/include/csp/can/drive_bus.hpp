@@ -31,6 +31,10 @@ struct ArmState {
   // The joints in operation enabled are not all in one mode of operation: the robot runs none of
   // them (one control mode per motion, as Franka's); each such drive sends EMCY 0x6320 once.
   bool mixed_modes = false;
+  // The robot runs a motion on the drives' targets (every drive in operation enabled in one mode
+  // and the motion started): the enabled drives set statusword bit 12 ("drive follows the
+  // target"); when it ends while some stay enabled, those send EMCY 0xFF00.
+  bool motion = false;
 };
 
 // The robot behind the drives: one cycle per SYNC.

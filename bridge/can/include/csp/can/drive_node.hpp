@@ -24,6 +24,11 @@ namespace csp::can {
 // CiA 402 "parameter error": this drive is in operation enabled in another mode of operation than
 // other enabled drives of the arm, so the robot runs none of them (one control mode per motion).
 inline constexpr uint16_t kEmcyMixedModes = 0x6320;
+// Device specific (CiA 301 class 0xFFxx; 0xFF01 + i are libfranka's errors): the robot stopped
+// acting on this drive's targets while the drive stays in operation enabled, because the motion
+// ended (another drive left operation enabled, or a mode change): statusword bit 12 clears and
+// the targets are ignored until all seven drives are in operation enabled in one mode again.
+inline constexpr uint16_t kEmcyTargetIgnored = 0xFF00;
 
 // One joint's measured state, SI units (libfranka names).
 struct JointMeasurement {
@@ -76,8 +81,11 @@ class DriveNode final : private ObjectWriter {
   JointCommand command() const;
   // SYNC, second half (and at power-on): the robot's measurement; errors of the whole robot
   // (non-empty = a reflex) fault the drive with one EMCY per error; `mixed_modes` (the enabled
-  // drives of the arm are not in one mode) sends EMCY 0x6320 once if this drive is enabled.
-  void update(const JointMeasurement& measured, const rt::ErrorSet& errors, bool mixed_modes);
+  // drives of the arm are not in one mode) sends EMCY 0x6320 once if this drive is enabled;
+  // `motion`: the robot runs a motion on the drives' targets. Statusword bit 12 ("drive follows
+  // the target") is set only in operation enabled during a motion; a drive that was followed and
+  // stays in operation enabled when the motion ends sends EMCY 0xFF00 (kEmcyTargetIgnored).
+  void update(const JointMeasurement& measured, const rt::ErrorSet& errors, bool mixed_modes, bool motion);
   // Fault reset (402 bit 7 rising edge) or a write to 0x2003 since the last call.
   bool take_recovery_request();
 
@@ -108,6 +116,7 @@ class DriveNode final : private ObjectWriter {
   bool recovery_requested_ = false;
   bool received_since_sync_ = false;
   bool mixed_modes_reported_ = false;  // EMCY 0x6320 sent for the current mix of modes
+  bool followed_ = false;              // in operation enabled, and the robot's motion acts on the targets (bit 12)
   JointMeasurement measured_;          // the robot's latest: a reset node reports it, not zeros
   // Slots of the objects the drive logic reads every cycle.
   struct Slots {

@@ -30,6 +30,15 @@ inline constexpr uint32_t kHeartbeat = 0x700;
 // Bit 31 of a COB-ID object (0x1014, PDO communication sub-index 1): the EMCY or PDO does not exist.
 inline constexpr uint32_t kCobIdInvalid = 0x80000000u;
 
+// CiA 301 "restricted CAN-IDs" (7.3.5, the table of the pre-defined connection set): NMT 0x000,
+// reserved 0x001-0x07F, 0x101-0x180, default SDO 0x581-0x5FF and 0x601-0x67F, reserved 0x6E0-0x6FF,
+// NMT error control 0x701-0x77F, reserved 0x780-0x7FF. No configurable object (SYNC, TIME, EMCY,
+// PDO, SDO) may use them.
+inline bool is_restricted_can_id(uint32_t id) {
+  return id <= 0x07F || (id >= 0x101 && id <= 0x180) || (id >= 0x581 && id <= 0x5FF) || (id >= 0x601 && id <= 0x67F) ||
+         (id >= 0x6E0 && id <= 0x6FF) || id >= 0x701;
+}
+
 // A frame carrying `bytes` (at most 8).
 inline Frame make_frame(uint32_t id, std::initializer_list<uint8_t> bytes) {
   Frame f;

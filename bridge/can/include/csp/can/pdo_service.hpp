@@ -14,6 +14,14 @@
 
 namespace csp::can {
 
+// CiA 301 rules for writing a COB-ID object (PDO communication sub-index 1, EMCY 0x1014): 0, or the
+// SDO abort code 0x06090030 (invalid value) that refuses changing `current` to `value`. An object
+// that exists (bit 31 = 0) can only be switched off, not moved (set bit 31 first); 11-bit
+// identifiers only; an object switched on may not use a restricted CAN-ID (is_restricted_can_id)
+// nor the SYNC's (`sync_cob_id`, 0x1005), which would put its frames on the NMT, SYNC, SDO or
+// heartbeat identifiers.
+uint32_t check_cob_id(uint32_t current, uint32_t value, uint32_t sync_cob_id);
+
 class PdoService {
  public:
   // RPDO values go through `writer`; length errors are reported through `emcy`.

@@ -10,7 +10,9 @@
 //   position mode, CSV (9) -> joint velocity mode, with every check the emulator makes;
 // - joints in operation enabled in different modes run no motion: an error event in the session
 //   log, and ArmState::mixed_modes (EMCY 0x6320 from those drives);
-// - a joint leaving operation enabled, or a mode change, finishes the motion;
+// - a joint leaving operation enabled, or a mode change, finishes the motion; drives left in
+//   operation enabled then clear statusword bit 12 and send EMCY 0xFF00 (their targets are
+//   ignored), and the session log gets an error event naming them;
 // - a cycle without every enabled joint's RPDO is lost: 20 in a row give the reflex
 //   communication_constraints_violation; any reflex faults every drive (EMCY, 402 fault);
 // - a fault reset (or 0x2003) is libfranka's automaticErrorRecovery().
@@ -32,6 +34,8 @@ struct ServerArmCounters {
   uint64_t motions = 0;           // START_MOTION requests sent
   uint64_t mixed_modes = 0;       // times the enabled joints came to be in different modes (no motion)
   uint64_t recoveries = 0;        // AUTOMATIC_ERROR_RECOVERY requests sent
+  uint64_t abandoned_motions = 0; // motions that ended while drives stayed in operation enabled
+  uint64_t ignored_cycles = 0;    // cycles with a drive in operation enabled whose targets no motion ran
 };
 
 class ServerArm : public Arm {
@@ -47,6 +51,8 @@ class ServerArm : public Arm {
   const bridge::RobotServer& server() const { return server_; }
   const ServerArmCounters& counters() const { return counters_; }
   bridge::LogWriter* log() { return log_.get(); }
+  // An event record in the session log (replay skips events), e.g. the session's frame counts.
+  void log_event(const std::string& text);
   uint64_t state_messages() const { return state_messages_; }
 
  private:
