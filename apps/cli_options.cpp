@@ -1,11 +1,14 @@
 #include "cli_options.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 
 #include "csp/dynamics/arrays.hpp"
+#include "csp/io/joint_log.hpp"   // output_file_problem, quote_input
 
 namespace csp::cli {
 
@@ -18,7 +21,7 @@ std::vector<double> parse_numbers(const std::string& text, std::size_t count, co
     char* stop = nullptr;
     const double value = std::strtod(item.c_str(), &stop);
     if (item.empty() || stop != item.c_str() + item.size() || !std::isfinite(value))
-      throw UsageError(name + ": `" + item + "` is not a finite number (expected " + std::to_string(count) +
+      throw UsageError(name + ": " + quote_input(item) + " is not a finite number (expected " + std::to_string(count) +
                        " comma-separated numbers)");
     values.push_back(value);
     start = end + 1;
@@ -96,8 +99,64 @@ rt::Scenario ScenarioArguments::load() const {
 }
 
 namespace {
+
 std::atomic<bool> stop_requested{false};
+std::string running_command = "csp";
+
+// A path as messages show it: as given, unless absurdly long (a path is at most PATH_MAX bytes).
+std::string shown(const std::string& path) { return path.size() <= 4096 ? path : quote_input(path, 256); }
+
 }  // namespace
+
+void set_command_name(const std::string& name) { running_command = name; }
+const std::string& command_name() { return running_command; }
+
+Outputs& Outputs::file(const std::string& option, const std::string& path) {
+  if (!path.empty()) files_.push_back({option, path, ""});
+  return *this;
+}
+
+Outputs& Outputs::directory(const std::string& option, const std::string& path, const std::vector<std::string>& names) {
+  if (path.empty()) return *this;
+  directories_.push_back({option, path, path});
+  for (const std::string& name : names) files_.push_back({option + " (its " + name + ")", (std::filesystem::path(path) / name).string(), path});
+  return *this;
+}
+
+Outputs& Outputs::input(const std::string& what, const std::string& path) {
+  if (!path.empty()) inputs_.push_back({what, path, ""});
+  return *this;
+}
+
+void Outputs::check() const {
+  for (const Entry& d : directories_)
+    if (const std::string problem = output_directory_problem(d.path); !problem.empty())
+      throw UsageError(d.option + " " + shown(d.path) + ": " + problem);
+  for (const Entry& f : files_) {
+    // A file in a directory output that is yet to be made: the directory's check says it all.
+    const std::string parent = std::filesystem::path(f.path).parent_path().string();
+    const bool in_new_directory = std::any_of(directories_.begin(), directories_.end(), [&](const Entry& d) {
+      return !std::filesystem::is_directory(d.path) && (d.path == f.directory || same_file(parent.empty() ? "." : parent, d.path));
+    });
+    if (in_new_directory) continue;
+    if (const std::string problem = output_file_problem(f.path); !problem.empty())
+      throw UsageError(f.option + " " + shown(f.path) + ": " + problem);
+  }
+  for (std::size_t i = 0; i < files_.size(); ++i) {
+    for (const Entry& in : inputs_)
+      if (same_file(files_[i].path, in.path))
+        throw UsageError(files_[i].option + " " + shown(files_[i].path) + ": is the input file (" + in.option +
+                         "); choose another output file");
+    for (std::size_t j = 0; j < i; ++j)
+      if (same_file(files_[i].path, files_[j].path))
+        throw UsageError(files_[i].option + " " + shown(files_[i].path) + ": the same file as " + files_[j].option +
+                         "; give each output a file of its own");
+    for (const Entry& d : directories_)
+      if (files_[i].directory != d.path && same_file(files_[i].path, d.path))
+        throw UsageError(files_[i].option + " " + shown(files_[i].path) + ": the directory of " + d.option +
+                         "; give each output a path of its own");
+  }
+}
 
 std::atomic<bool>& stop_on_signals() {
   stop_requested = false;
@@ -133,8 +192,10 @@ void print_timing(const rt::TimingReport& timing, const char* round_trip) {
 
 std::optional<int> print_early_end(const std::string& observer_failure, bool stopped, double robot_time, int signal_status) {
   if (!observer_failure.empty()) {
-    std::printf("  STOPPED at t = %.3f s: %s\n", robot_time, observer_failure.c_str());
-    return 1;
+    std::printf("  STOPPED at t = %.3f s: a log could not be written (the error is on stderr)\n", robot_time);
+    std::fflush(stdout);
+    std::fprintf(stderr, "csp %s: %s\n", command_name().c_str(), observer_failure.c_str());
+    return 2;
   }
   if (!stopped) return std::nullopt;
   std::printf("  STOPPED at t = %.3f s by a signal (Ctrl-C or SIGTERM)\n", robot_time);

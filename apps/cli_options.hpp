@@ -49,6 +49,33 @@ struct ScenarioArguments {
   rt::Scenario load() const;
 };
 
+// The files a command writes and reads, checked before it runs (and before anything is printed):
+// every output must be a file (or directory) that can be written, no two outputs may be the same
+// file, and no output may be an input. The check creates and truncates nothing: a refused command
+// leaves every file as it was.
+class Outputs {
+ public:
+  // A file the command writes, named by `option`; nothing for an empty path (the option not given).
+  Outputs& file(const std::string& option, const std::string& path);
+  // A directory the command writes `names` into (created if missing); nothing for an empty path.
+  Outputs& directory(const std::string& option, const std::string& path, const std::vector<std::string>& names);
+  // A file the command reads (`what`: its option or role), which no output may be.
+  Outputs& input(const std::string& what, const std::string& path);
+  // Throws UsageError naming the option, the path and the problem, for the first problem found.
+  void check() const;
+
+ private:
+  struct Entry {
+    std::string option, path;
+    std::string directory;   // a directory output's file: the directory
+  };
+  std::vector<Entry> files_, directories_, inputs_;
+};
+
+// The command being run ("emulate", "log", ...), for messages printed outside an exception.
+void set_command_name(const std::string& name);
+const std::string& command_name();
+
 // The flag a run polls to end as its duration would: set by Ctrl-C (SIGINT) and SIGTERM from now
 // on, false until then. One flag for the process (a signal handler sees only globals).
 std::atomic<bool>& stop_on_signals();
@@ -57,9 +84,27 @@ std::atomic<bool>& stop_on_signals();
 // what the round trip measured ("controller compute time", "state -> command").
 void print_timing(const rt::TimingReport& timing, const char* round_trip);
 
-// How a run ended early, the same line for every front end (run::RunResult): an observer that failed
-// (a log that could not be written: exit status 1) or a signal (`signal_status`). `robot_time`:
+// How a run ended early, the same for every front end (run::RunResult): an observer that failed
+// (a log that could not be written: the error on stderr as "csp <command>: ...", as every other
+// error, exit status 2; the STOPPED line on stdout) or a signal (`signal_status`). `robot_time`:
 // where it ended [s]. Returns the exit status, nullopt for a run that went to its end.
 std::optional<int> print_early_end(const std::string& observer_failure, bool stopped, double robot_time, int signal_status);
+
+// At a run's end, the logs' last rows and events to their files (each object may be null): what
+// the first that fails says, empty if all were written. `failure`: a failure already known (an
+// observer that failed during the run), returned as it is.
+template <class... Logs>
+std::string flush_logs(std::string failure, Logs*... logs) {
+  const auto flush = [&](auto* log) {
+    if (!log || !failure.empty()) return;
+    try {
+      log->flush();
+    } catch (const std::exception& e) {
+      failure = e.what();
+    }
+  };
+  (flush(logs), ...);
+  return failure;
+}
 
 }  // namespace csp::cli

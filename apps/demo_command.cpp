@@ -61,6 +61,11 @@ Command add_demo_command(CLI::App& app) {
   command->add_option("--samples", workspace->samples, "Workspace samples")->capture_default_str();
   command->add_option("--out", workspace->out, "Directory for the workspace figures")->capture_default_str();
   return [workspace] {
+    // Before anything is printed (run_workspace checks them again, after the model quantities).
+    if (workspace->samples <= 0 || workspace->samples > kMaxWorkspaceSamples)
+      throw UsageError("--samples: expected 1 to " + std::to_string(kMaxWorkspaceSamples) + " samples, got " +
+                       std::to_string(workspace->samples));
+    Outputs().directory("--out", workspace->out, {"workspace_side.svg", "workspace_top.svg"}).check();
     std::printf("CSP demo: q_ready = [0, -pi/4, 0, -3pi/4, 0, pi/2, pi/4] rad\n\n");
     describe("panda", "gaz2019", "gaz2019");
     describe("fr3", "franka_description", "none");

@@ -50,6 +50,14 @@ int run_emulate(const EmulateArguments& args) {
   }
   if (!scenario.emulator.scene && !args.report.empty())
     throw UsageError("--report: only for a scenario with a scene (configs/scenarios/medical/)");
+  // Before the run and before any file is opened: a refused output leaves every file as it was.
+  Outputs()
+      .file("--log", args.log)
+      .file("--lcm-log", args.lcm_log)
+      .directory("--report", args.report, {"force.svg", "path.svg", "penetration.svg"})
+      .input("the scenario", scenario.path)
+      .input("the scenario's robot file", scenario.robot_file)
+      .check();
 
   // The run and its observers: progress, the task's measure (a scene's medical metrics, else the
   // joint tracking), the logs.
@@ -81,10 +89,13 @@ int run_emulate(const EmulateArguments& args) {
   // Ctrl-C (or SIGTERM) and a log that cannot be written end the motion as its duration would:
   // the robot holds, the summary is printed, the logs end with whole rows and events.
   const run::RunResult result = run.run(controller, &stop_on_signals());
+  // The logs' last rows: a write error there ends the command as one during the run does.
+  const std::string log_failure = flush_logs(result.observer_failure, log.get(), lcm_log.get());
 
   const rt::EmulatorCounters& counters = run.emulator().counters();
-  progress.finish(format("%llu cycles (%.3f s of motion)", static_cast<unsigned long long>(counters.motion_cycles),
-                         static_cast<double>(counters.motion_cycles) * 1e-3));
+  if (log_failure.empty())   // else the error is the one line on stderr
+    progress.finish(format("%llu cycles (%.3f s of motion)", static_cast<unsigned long long>(counters.motion_cycles),
+                           static_cast<double>(counters.motion_cycles) * 1e-3));
   std::printf("  ran %llu cycles (%.3f s), lost commands %llu (longest run %d)\n",
               static_cast<unsigned long long>(counters.motion_cycles), static_cast<double>(counters.motion_cycles) * 1e-3,
               static_cast<unsigned long long>(counters.lost_commands), counters.max_consecutive_lost);
@@ -104,7 +115,7 @@ int run_emulate(const EmulateArguments& args) {
   if (lcm_log) std::printf("  LCM log: %s (%llu events)\n", args.lcm_log.c_str(), static_cast<unsigned long long>(lcm_log->events()));
 
   const rt::RobotState& state = run.emulator().state();
-  if (const std::optional<int> status = print_early_end(result.observer_failure, result.stopped, state.time.toSec(), 130))
+  if (const std::optional<int> status = print_early_end(log_failure, result.stopped, state.time.toSec(), 130))
     return *status;
   if (controller.reflex() || state.robot_mode == rt::RobotMode::kReflex) {
     std::printf("  REFLEX at t = %.3f s: %s\n", state.time.toSec(), run.emulator().reflex_reason().c_str());

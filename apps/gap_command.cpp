@@ -1,6 +1,8 @@
 // csp gap: diagnose the sim-to-real gap of a joint log (docs/gap.md): where the simulator model
 // misses, which unmodelled effect is responsible, how far the held-out gap shrinks once it is added.
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -70,6 +72,15 @@ int run_gap(const GapArguments& args, const std::string& command_line) {
     throw UsageError("--train-fraction: expected a number between 0 and 1");
   if (!(args.sample_period > 0.0 && args.sample_period <= 0.02))
     throw UsageError("--sample-period: expected a period in (0, 0.02] s");
+  // The outputs before the diagnosis (minutes on a long log): a bad path fails at once.
+  Outputs()
+      .file("--json", args.json)
+      .directory("--report", args.report,
+                 {"report.md", "unexplained.svg", "torque_heldout.svg", "residual_vs_velocity.svg", "effect_ranking.svg"})
+      .input("--log", args.log)
+      .input("--log-heldout", args.heldout)
+      .input("--robot", args.robot_given ? args.model.robot : "")
+      .check();
   const Model model = build_model(args);
   gap::DiagnosisOptions options;
   options.train_fraction = args.train_fraction;
@@ -102,7 +113,8 @@ int run_gap(const GapArguments& args, const std::string& command_line) {
   if (!args.json.empty()) {
     std::ofstream out(args.json);
     out << gap::to_json(diagnosis).dump(2) << '\n';
-    if (!out) throw std::runtime_error("cannot write " + args.json);
+    out.close();   // (a write error may show only when the last bytes go out)
+    if (!out) throw std::runtime_error(args.json + ": cannot write the diagnosis (" + std::strerror(errno) + ")");
     std::cout << "json: " << args.json << '\n';
   }
   if (!args.report.empty()) {

@@ -34,20 +34,29 @@ Command add_log_command(CLI::App& app) {
   }
   return [args, to_csv] {
     // Opening the output truncates it: writing over the input would destroy what is being read.
-    std::error_code error;
-    if (std::filesystem::equivalent(args->input, args->out, error))
-      throw UsageError("--out: `" + args->out + "` is the input file; choose another output file");
+    Outputs().file("--out", args->out).input(to_csv->parsed() ? "the LCM log" : "the CSV file", args->input).check();
     if (to_csv->parsed()) {
       ProgressMeter progress("csp log export", args->progress);
       const bridge::ExportReport r = bridge::export_csv(args->input, args->out, args->channel, progress.callback());
+      if (r.rows == 0) {
+        std::error_code error;
+        std::filesystem::remove(args->out, error);   // a header alone is no joint log
+        std::string why = r.refused.empty() ? "" : "; " + r.refused;
+        if (!r.damage.empty()) why += "; " + r.damage;
+        throw std::runtime_error(args->input + ": no robot_state_t on channel " + args->channel + why);
+      }
       progress.finish(std::to_string(r.rows) + " rows");
       std::printf("csp log export: %llu rows to %s (%llu repeated states skipped, %llu undecodable events)\n",
                   static_cast<unsigned long long>(r.rows), args->out.c_str(), static_cast<unsigned long long>(r.repeated),
                   static_cast<unsigned long long>(r.rejected));
-      if (r.rows == 0) throw std::runtime_error(args->input + ": no robot_state_t on channel " + args->channel);
       if (!r.missing.empty()) std::fprintf(stderr, "csp log export: %s: not in the recording: %s\n", args->input.c_str(), r.missing.c_str());
-      if (r.damage.empty()) return 0;
-      std::fprintf(stderr, "csp log export: %s: only the readable part was exported\n", r.damage.c_str());
+      // What was not exported, as csp replay and csp gap refuse it (one reader rule: read_state_event).
+      std::string left_out = r.damage;
+      if (!r.refused.empty())
+        left_out += (left_out.empty() ? "" : "; ") + r.refused +
+                    (r.rejected > 1 ? " (and " + std::to_string(r.rejected - 1) + " more)" : "");
+      if (left_out.empty()) return 0;
+      std::fprintf(stderr, "csp log export: %s: only the readable states were exported\n", left_out.c_str());
       return 1;
     }
     const uint64_t rows = bridge::import_csv(args->input, args->out, args->channel);

@@ -8,6 +8,7 @@
 
 #include "cli_options.hpp"
 #include "commands.hpp"
+#include "csp/io/joint_log.hpp"   // quote_input
 
 namespace {
 
@@ -22,11 +23,22 @@ std::optional<std::string> option_problem(const CLI::App& command) {
       long long parsed = 0;
       const char* begin = value.data() + (value[0] == '+' ? 1 : 0);
       if (whole && std::from_chars(begin, value.data() + value.size(), parsed).ec == std::errc::result_out_of_range)
-        return option->get_name() + ": `" + value + "` is out of range (expected a whole number of at most 64 bits)";
+        return option->get_name() + ": " + csp::quote_input(value) + " is out of range (expected a whole number of at most 64 bits)";
     }
   for (const CLI::App* sub : command.get_subcommands())
     if (std::optional<std::string> problem = option_problem(*sub)) return problem;
   return std::nullopt;
+}
+
+// A message as printed: one line of bounded length, whatever input it quotes (CLI11 quotes a
+// value it cannot convert whole; each reader shortens what it quotes with csp::quote_input, this
+// is the net under them all).
+std::string bounded(const std::string& message) {
+  constexpr std::size_t kMaxBytes = 2000;
+  std::string line = message.size() <= kMaxBytes ? message : message.substr(0, kMaxBytes) + "... (" + std::to_string(message.size()) + " bytes)";
+  for (char& c : line)
+    if (c == '\n' || c == '\r') c = ' ';
+  return line;
 }
 
 }  // namespace
@@ -51,7 +63,7 @@ int main(int argc, char** argv) {
     is_known = is_known || (argc > 1 && command->get_name() == argv[1]);
   }
   if (argc > 1 && argv[1][0] != '-' && !is_known) {
-    std::cerr << "csp: unknown command `" << argv[1] << "` (commands: " << known << ")\n";
+    std::cerr << "csp: unknown command " << csp::quote_input(argv[1]) << " (commands: " << known << ")\n";
     if (CSP_MISSING_COMMANDS[0] != '\0')
       std::cerr << "csp: not built in: " CSP_MISSING_COMMANDS " (CSP_COMMANDS; every command: "
                    "cmake -B build -U CSP_COMMANDS && cmake --build build --target csp)\n";
@@ -64,7 +76,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);   // --help on a subcommand, --version
-    std::cerr << "csp: " << e.what() << " (see csp --help)\n";
+    std::cerr << "csp: " << bounded(e.what()) << " (see csp --help)\n";
     return 2;
   }
   if (const std::optional<std::string> problem = option_problem(app)) {
@@ -74,10 +86,11 @@ int main(int argc, char** argv) {
 
   for (const auto& [command, run] : commands) {
     if (!command->parsed()) continue;
+    set_command_name(command->get_name());
     try {
       return run();
     } catch (const std::exception& e) {   // UsageError, ConfigError, invalid_argument, I/O errors
-      std::cerr << "csp " << command->get_name() << ": " << e.what() << '\n';
+      std::cerr << "csp " << command->get_name() << ": " << bounded(e.what()) << '\n';
     }
     return 2;
   }

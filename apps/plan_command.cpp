@@ -53,7 +53,14 @@ struct CheckArguments {
   bool progress = false;
 };
 
+// The files of a plan's report (planners::write_report) and of the plan itself (write_plan_files).
+const std::vector<std::string> kReportFiles = {"report.json", "report.md", "limits.svg", "clearance.svg", "tool_path.svg",
+                                               "singular_values.svg"};
+const std::vector<std::string> kPlanFiles = {"trajectory.csv", "robot.yaml", "scenario.yaml", "plan.yaml",  "report.json",
+                                             "report.md",      "limits.svg", "clearance.svg", "tool_path.svg", "singular_values.svg"};
+
 int run_check(const CheckArguments& args) {
+  Outputs().directory("--out", args.out, kReportFiles).input("the trajectory", args.trajectory).check();
   ProgressMeter progress("csp plan check", args.progress);
   progress.update("checking the trajectory", 0, 0);
   planners::CheckOptions options;
@@ -80,6 +87,7 @@ struct PlanArguments {
 run::PlanJob plan_job(const std::string& command, const PlanArguments& args, const CLI::App& subcommand,
                       ProgressMeter& progress) {
   if (args.seed < 1 || args.seed > 4294967295LL) throw UsageError("--seed: expected a whole number from 1 to 2^32-1");
+  Outputs().directory("--out", args.out, kPlanFiles).check();   // before the planning (seconds to minutes)
   run::PlanJob job{{command, args.scene, args.robot, static_cast<std::uint64_t>(args.seed), {}}, args.out, args.verify,
                    progress.callback()};
   for (const CLI::Option* option : subcommand.get_options()) {

@@ -27,6 +27,7 @@ struct ReplayArguments {
 int run_replay(const ReplayArguments& args) {
   if (args.play && !args.scenario.empty()) throw UsageError("--scenario: re-simulation only; --play publishes the log as it is");
   if (args.play && !args.csv.empty()) throw UsageError("--csv: re-simulation only; --play publishes the log as it is");
+  Outputs().file("--csv", args.csv).input("the log", args.log).input("--scenario", args.scenario).check();
   if (args.play) {
     bridge::PlaybackOptions options;
     options.speed = args.speed;
@@ -36,6 +37,11 @@ int run_replay(const ReplayArguments& args) {
     ProgressMeter progress("csp replay", args.progress);
     options.progress = progress.callback();
     const bridge::PlaybackReport r = bridge::play_back(args.log, options);
+    // Nothing published is no playback (an empty file, or nothing readable in it), unless a signal
+    // ended it before the first event.
+    if (r.published == 0 && !options.stop->load())
+      throw std::runtime_error(args.log + ": no event to publish (" +
+                               (r.damage.empty() ? std::string("an empty log") : "nothing readable: " + r.damage) + ")");
     progress.finish(std::to_string(r.published) + " events published");
     std::printf("csp replay: published %llu events of %s on %s\n", static_cast<unsigned long long>(r.published), args.log.c_str(),
                 args.lcm_url.c_str());
@@ -53,9 +59,13 @@ int run_replay(const ReplayArguments& args) {
   run::LogReplaySource replay(recording, progress.callback());
   // Ctrl-C / SIGTERM end the re-simulation where it is; what it compared is reported.
   const run::RunResult result = run.run(replay, &stop_on_signals());
+  const std::string log_failure = flush_logs(result.observer_failure, csv.get());
   const bridge::ResimulationReport& r = replay.report();
-  progress.finish(std::to_string(r.states) + " states re-simulated: " +
-                  (r.identical() ? "identical, bit for bit" : std::to_string(r.differing_states) + " differ"));
+  if (log_failure.empty())   // else the error is the one line on stderr
+    progress.finish(std::to_string(r.states) + " states re-simulated: " +
+                    (r.states == 0         ? std::string("nothing compared")
+                     : r.identical()       ? std::string("identical, bit for bit")
+                                           : std::to_string(r.differing_states) + " differ"));
   std::printf("csp replay: %s: re-simulated %llu states from %llu recorded commands and requests\n  scenario: %s\n",
               args.log.c_str(), static_cast<unsigned long long>(r.states), static_cast<unsigned long long>(r.messages),
               r.scenario.c_str());
@@ -70,8 +80,10 @@ int run_replay(const ReplayArguments& args) {
     std::fprintf(stderr, "csp replay: %s\n", r.damage.c_str());
   }
   if (csv) std::printf("  CSV log of the re-simulation: %s (%llu rows)\n", args.csv.c_str(), static_cast<unsigned long long>(csv->log().rows()));
-  if (const std::optional<int> status = print_early_end(result.observer_failure, result.stopped, run.emulator().state().time.toSec(), 130))
+  if (r.states == 0) std::printf("  no recorded state was compared\n");
+  if (const std::optional<int> status = print_early_end(log_failure, result.stopped, run.emulator().state().time.toSec(), 130))
     return *status;
+  // (resimulate refuses a log without a state to compare: only a stop ends a replay before one)
   if (r.identical()) std::printf("  identical to the recorded states, bit for bit\n");
   return r.identical() ? 0 : 1;
 }

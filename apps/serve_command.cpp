@@ -27,6 +27,12 @@ struct ServeArguments {
 
 int run_serve(const ServeArguments& args) {
   const rt::Scenario scenario = args.scenario.load();
+  Outputs()
+      .file("--log", args.log)
+      .file("--csv", args.csv)
+      .input("the scenario", scenario.path)
+      .input("the scenario's robot file", scenario.robot_file)
+      .check();
   bridge::ServeOptions options;
   options.clock = scenario.clock;
   options.duration = scenario.duration;
@@ -48,6 +54,7 @@ int run_serve(const ServeArguments& args) {
   std::fflush(stdout);
   // Ctrl-C / SIGTERM end the run cleanly: the logs keep every cycle run.
   const run::RunResult result = run.run(bus, &stop_on_signals());
+  const std::string log_failure = flush_logs(result.observer_failure, csv.get());   // (the LCM log: bridge::serve)
 
   const bridge::ServeReport& r = bus.report();
   const bridge::ServerCounters& c = r.counters;
@@ -68,7 +75,7 @@ int run_serve(const ServeArguments& args) {
                 static_cast<unsigned long long>(r.state_messages));
   if (csv) std::printf("  CSV log: %s (%llu rows)\n", args.csv.c_str(), static_cast<unsigned long long>(csv->log().rows()));
   // A signal is how a serve is meant to end: exit status 0.
-  return print_early_end(result.observer_failure, result.stopped, run.emulator().state().time.toSec(), 0).value_or(0);
+  return print_early_end(log_failure, result.stopped, run.emulator().state().time.toSec(), 0).value_or(0);
 }
 
 }  // namespace

@@ -3,7 +3,9 @@
 // prints the reach statistics next to Franka's published 855 mm maximum reach.
 #include <algorithm>
 #include <charconv>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -55,16 +57,22 @@ void print_statistics(const char* name, const ReachStatistics& s, const Vector3&
 }  // namespace
 
 int run_workspace(const WorkspaceArguments& args) {
-  if (args.samples <= 0)
-    throw UsageError("--samples: expected a positive number of samples, got " + std::to_string(args.samples));
+  if (args.samples <= 0 || args.samples > kMaxWorkspaceSamples)
+    throw UsageError("--samples: expected 1 to " + std::to_string(kMaxWorkspaceSamples) + " samples, got " +
+                     std::to_string(args.samples) + " (the bound: a billion take about 7 minutes at 400 ns each, and --points 60 GB)");
   if (args.seed < 0) throw UsageError("--seed: expected a non-negative integer, got " + std::to_string(args.seed));
   if (args.grid < 10 || args.grid > kMaxGrid)
     throw UsageError("--grid: expected 10.." + std::to_string(kMaxGrid) + " cells per axis, got " +
                      std::to_string(args.grid));
   const Model model = args.model.build();
 
-  // Check the outputs before sampling, so a bad path fails at once.
+  // Check the outputs before sampling, so a bad path fails at once, before anything is printed.
   namespace fs = std::filesystem;
+  Outputs()
+      .directory("--out", args.out, {"workspace_side.svg", "workspace_top.svg"})
+      .file("--points", args.points)
+      .input("--robot", args.model.robot)
+      .check();
   const fs::path dir(args.out);
   std::error_code error;
   fs::create_directories(dir, error);
@@ -72,12 +80,10 @@ int run_workspace(const WorkspaceArguments& args) {
     throw std::runtime_error("cannot create output directory " + dir.string() +
                              (error ? ": " + error.message() : ": not a directory"));
   const std::string side_path = (dir / "workspace_side.svg").string(), top_path = (dir / "workspace_top.svg").string();
-  for (const std::string& path : {side_path, top_path})
-    if (!std::ofstream(path, std::ios::app)) throw std::runtime_error("cannot write " + path);
   std::ofstream points;
   if (!args.points.empty()) {
     points.open(args.points, std::ios::binary);
-    if (!points) throw std::runtime_error("cannot write " + args.points);
+    if (!points) throw std::runtime_error(args.points + ": cannot write the points (" + std::strerror(errno) + ")");
     std::cerr << format("csp workspace: writing %lld points to %s (about %.0f MB)\n", args.samples,
                         args.points.c_str(), 60e-6 * static_cast<double>(args.samples));
     points << "flange_x,flange_y,flange_z,ee_x,ee_y,ee_z\n";
@@ -92,14 +98,18 @@ int run_workspace(const WorkspaceArguments& args) {
   options.progress = progress.callback();
   WorkspaceCallback on_point;
   if (points.is_open())
-    on_point = [&points](const WorkspacePoint& p) { write_point_row(points, p.flange, p.end_effector); };
+    on_point = [&](const WorkspacePoint& p) {
+      write_point_row(points, p.flange, p.end_effector);
+      // A disk that fills ends the sampling at once, not after the last of a billion samples.
+      if (!points) throw std::runtime_error(args.points + ": writing the points failed (" + std::strerror(errno) + ")");
+    };
 
   const auto start = std::chrono::steady_clock::now();
   const WorkspaceResult result = sample_workspace(model, options, on_point);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (points.is_open()) {
     points.close();
-    if (!points) throw std::runtime_error("cannot write " + args.points);
+    if (!points) throw std::runtime_error(args.points + ": writing the points failed (" + std::strerror(errno) + ")");
   }
 
   // Figures of the end-effector positions (the flange itself when there is no end effector).

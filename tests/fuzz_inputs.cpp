@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -29,6 +30,8 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "csp/bridge/lcm_log.hpp"
@@ -324,6 +327,69 @@ Class scenario_yaml() {
           }); }};
 }
 
+// Sizes no joint log has: a column name, a field, a line of megabytes (a 10 MB column name took
+// 46 s and printed a 10 MB message), and numbers a robot never reports (1e300 N m was accepted).
+// One input in 16 gets one of them, so that the class keeps its run time.
+std::string huge_mutation(Mutator& m, std::string text) {
+  static const std::vector<std::size_t> sizes = {300, 5000, 100'000, 1'100'000};   // the last: past the 1 MiB line bound
+  const std::size_t size = m.pick(sizes);
+  const std::size_t header_end = text.find('\n');
+  switch (m.below(4)) {
+    case 0: {   // a huge column name, in place of one of the header's or added at its end
+      const std::size_t at = header_end == std::string::npos ? text.size() : header_end;
+      const std::string name = m.below(2) ? "x_" + std::string(size, 'a') : std::string(size, 'q');
+      return text.substr(0, at) + (m.below(2) ? "," + name : "") + (m.below(2) ? "" : "," + name) + text.substr(at);
+    }
+    case 1: {   // a very long line among the rows
+      const std::size_t at = text.find('\n', m.below(text.size() + 1));
+      std::string line(size, '1');
+      for (std::size_t k = 0; k < line.size(); k += 1 + m.below(40)) line[k] = ',';
+      return at == std::string::npos ? text + line + '\n' : text.substr(0, at + 1) + line + '\n' + text.substr(at + 1);
+    }
+    case 2: {   // a huge field: a number of `size` digits
+      const std::size_t at = text.find(',', header_end == std::string::npos ? 0 : header_end + m.below(text.size()));
+      return at == std::string::npos ? text : text.substr(0, at + 1) + std::string(size, '7') + text.substr(at + 1);
+    }
+    default: {  // a huge but finite number in a field
+      static const std::vector<std::string> numbers = {"1e300", "-1e300", "1e200", "1.7976931348623157e308", "1e160", "-1e20", "4e4"};
+      const std::size_t at = text.find(',', header_end == std::string::npos ? 0 : header_end + m.below(text.size()));
+      if (at == std::string::npos) return text;
+      const std::size_t end = text.find_first_of(",\n", at + 1);
+      return text.substr(0, at + 1) + m.pick(numbers) + (end == std::string::npos ? "" : text.substr(end));
+    }
+  }
+}
+
+// A rejection of the joint-log readers is also one of bounded length, quick: the input it quotes
+// is shortened (quote_input).
+constexpr std::size_t kMaxMessageBytes = 1024;
+constexpr double kMaxSeconds = 10.0;   // per input; the longest take about 20 ms (1 MB read)
+
+// An accepted joint log must be usable: what every fit computes, sums of squares of its numbers,
+// stays finite (1e300 N m passed every check but overflows the first one).
+std::string unusable_value(const JointLog& log) {
+  for (const ColumnGroup& group : kJointLogSchema) {
+    if (group.text) continue;
+    std::string problem;
+    std::visit(
+        [&](auto member) {
+          using Series = std::decay_t<decltype(log.*member)>;
+          if constexpr (!std::is_same_v<typename Series::value_type, std::string>) {
+            const Series& series = log.*member;
+            for (std::size_t k = 0; k < series.size() && problem.empty(); ++k) {
+              double squares = 0.0;
+              if constexpr (std::is_same_v<typename Series::value_type, double>) squares = series[k] * series[k];
+              else squares = series[k].squaredNorm();
+              if (!std::isfinite(squares)) problem = "row " + std::to_string(k + 1) + ", group " + std::string(group.name);
+            }
+          }
+        },
+        group.member);
+    if (!problem.empty()) return problem;
+  }
+  return {};
+}
+
 // Joint logs: the real Panda log's first rows, and the emulator's full column set.
 Class csv_log() {
   std::vector<std::string> bases;
@@ -346,18 +412,31 @@ Class csv_log() {
     }
     bases.push_back(read_text(path));
   }
-  return {"csv_log", [bases](Mutator& m) { return m.text(m.pick(bases)); },
+  return {"csv_log",
+          [bases](Mutator& m) {
+            std::string text = m.text(m.pick(bases));
+            return m.below(16) == 0 ? huge_mutation(m, std::move(text)) : text;
+          },
           [](const std::string& input) -> Verdict {
             const std::string path = temp_dir() + "/fuzz.csv";
             write_text(path, input);
+            const auto start = std::chrono::steady_clock::now();
+            Verdict verdict;
             try {
-              read_joint_log_csv(path);
-              return {};
+              const JointLog log = read_joint_log_csv(path);
+              if (const std::string where = unusable_value(log); !where.empty())
+                verdict = {Outcome::kUnclear, "accepted, but a value's square overflows (" + where + "): not physically plausible"};
             } catch (const JointLogError& e) {
-              return rejection(e.what(), path);
+              const std::string message = e.what();
+              verdict = message.size() > kMaxMessageBytes
+                            ? Verdict{Outcome::kUnclear, "a message of " + std::to_string(message.size()) + " bytes: " + message.substr(0, 200)}
+                            : rejection(message, path);
             } catch (const std::exception& e) {
-              return {Outcome::kUnclear, std::string("not a JointLogError: ") + e.what()};
+              verdict = {Outcome::kUnclear, std::string("not a JointLogError: ") + e.what()};
             }
+            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            if (seconds > kMaxSeconds) verdict = {Outcome::kUnclear, "slow: " + std::to_string(seconds) + " s (" + verdict.detail.substr(0, 200) + ")"};
+            return verdict;
           }};
 }
 
@@ -491,12 +570,31 @@ Class cli() {
       {"replay", "--play", "--speed", "0", "@LOG@"},
       {"log", "export", "@LOG@", "--out", "@DIR@/x.csv"},
       {"gap", "--log", real_csv, "--sample-period", "0.01", "--train-fraction", "0.5", "--inertia", "gaz2019"},
+      // Every output option: what cannot be written (/proc/self/mem aborted the CSV writer), two
+      // outputs in one file, an output that is an input.
+      {"emulate", "--duration", "0.02", "--log", "@DIR@/e.csv", "--lcm-log", "@DIR@/e.lcmlog"},
+      {"replay", "@LOG@", "--csv", "@DIR@/r.csv"},
+      {"workspace", "--samples", "2000", "--grid", "20", "--out", "@DIR@", "--points", "@DIR@/p.csv"},
   };
   const std::vector<std::string> values = {"", "-1", "0", "1e308", "nan", "inf", "-inf", "1e-320", "x", "--q", "0,0",
-                                           "1,2,3,4,5,6,7,8", "/dev/null", "/", "--help", "9223372036854775808", "1e18"};
+                                           "1,2,3,4,5,6,7,8", "/dev/null", "/", "--help", "9223372036854775808", "1e18",
+                                           "/proc/self/mem", "/dev/full", "@DIR@", "@DIR@/missing/x.csv", "@DIR@/e.csv", "@LOG@"};
+  // Outputs no command can write (a /proc entry, a device, a directory, a missing directory) or
+  // that name another output's or the input's file; one input in four gets one on an output option.
+  const std::vector<std::string> output_options = {"--log", "--lcm-log", "--csv", "--out", "--points", "--json", "--report"};
+  const std::vector<std::string> bad_outputs = {"/proc/self/mem", "/dev/full", "@DIR@", "@DIR@/missing/x.csv", "@DIR@/e.csv", "@LOG@"};
   return {"cli",
-          [bases, values](Mutator& m) {
+          [bases, values, output_options, bad_outputs](Mutator& m) {
             std::vector<std::string> args = m.pick(bases);
+            std::vector<std::size_t> outputs;   // where an output option's value is
+            for (std::size_t i = 1; i + 1 < args.size(); ++i)
+              if (std::find(output_options.begin(), output_options.end(), args[i]) != output_options.end()) outputs.push_back(i + 1);
+            if (!outputs.empty() && m.below(4) == 0) {   // the command as it is, but for one output
+              args[m.pick(outputs)] = m.pick(bad_outputs);
+              std::string joined;
+              for (const std::string& a : args) joined += a + '\x1f';
+              return joined;
+            }
             const std::size_t edits = 1 + m.below(2);
             for (std::size_t e = 0; e < edits; ++e) {
               const std::size_t i = 1 + m.below(args.size() - 1);
@@ -507,6 +605,7 @@ Class cli() {
                 case 3: args.push_back(m.pick(values)); break;
               }
             }
+
             std::string joined;
             for (const std::string& a : args) joined += a + '\x1f';
             return joined;
@@ -522,6 +621,9 @@ std::vector<std::string> split_args(const std::string& joined) {
 }
 
 Verdict run_cli(const std::string& joined, const std::string& log) {
+  // The log as the class began with it: an input may have written over it (`emulate --log @LOG@`).
+  static const std::string base_log = read_text(log);
+  write_text(log, base_log);
   std::vector<std::string> args = {CSP_EXECUTABLE};
   for (std::string a : split_args(joined)) {
     if (a == "@LOG@") a = log;

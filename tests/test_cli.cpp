@@ -5,6 +5,7 @@
 //  - wrong input exits with 2 and one line on stderr naming the problem.
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -400,6 +401,241 @@ TEST(CliErrors, BadLoads) {
                       {"--load-inertia", "positive-definite"}});
   expect_usage_error({{"model", "--q", kQ, "--gravity", "0,0"}, {"--gravity", "expected 3"}});
   expect_usage_error({{"model", "--q", kQ, "--gravity", "0,0,inf"}, {"--gravity", "`inf`"}});
+}
+
+// ---------------------------------------------------------------------------------------------
+// Outputs (issue 25): every output option of every command refuses, before the command runs and in
+// one line on stderr (exit 2), a path it cannot write: a /proc entry (`--log /proc/self/mem`
+// aborted the CSV writer), a device, a directory, a path in a missing directory, a read-only file.
+
+const std::string kRealLog = std::string(CSP_SHARED_DATA_DIR) + "/real/panda_exciting_traj_1.csv";
+
+// The first `rows` data rows of the real Panda log (the header and rows as they are).
+std::string real_rows(std::size_t rows) {
+  std::ifstream in(kRealLog);
+  std::string text, line;
+  for (std::size_t k = 0; k <= rows && std::getline(in, line); ++k) text += line + '\n';
+  return text;
+}
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  const std::string path = (temp_dir() / name).string();
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
+
+// An LCM log of a short run of the default scenario, written once.
+const std::string& emulated_lcm_log() {
+  static const std::string path = [] {
+    const std::string p = (temp_dir() / "emulated.lcmlog").string();
+    const Process run = run_csp({"emulate", "--duration", "0.05", "--lcm-log", p});
+    if (run.exit_code != 0) throw std::runtime_error("csp emulate --lcm-log failed: " + run.err);
+    return p;
+  }();
+  return path;
+}
+
+struct BadPath {
+  std::string path, fragment;
+};
+
+// Files no command can write, each with what the message must say.
+std::vector<BadPath> bad_files() {
+  const std::filesystem::path dir = temp_dir() / "bad_outputs";
+  std::filesystem::create_directories(dir);
+  std::vector<BadPath> bad = {{"/proc/self/mem", "/proc or /sys entry"},
+                              {"/dev/full", "not a regular file"},
+                              {dir.string(), "is a directory"},
+                              {(dir / "missing" / "out.csv").string(), "does not exist"}};
+  const std::string read_only = (dir / "read_only.csv").string();
+  std::ofstream(read_only) << "kept\n";
+  std::filesystem::permissions(read_only, std::filesystem::perms::owner_read | std::filesystem::perms::group_read);
+  if (::access(read_only.c_str(), W_OK) != 0) bad.push_back({read_only, "cannot be written"});   // (root writes any file)
+  return bad;
+}
+
+// Directories no command can write into.
+std::vector<BadPath> bad_directories() {
+  const std::string file = write_temp("a_file", "x\n");
+  return {{"/proc/self/mem", "is not a directory"},
+          {"/dev/full", "is not a directory"},
+          {file, "is not a directory"},
+          {"/proc/csp_no_such_entry/figures", "/proc or /sys entry"}};
+}
+
+// `args` with "@" replaced by `path`.
+std::vector<std::string> with_path(std::vector<std::string> args, const std::string& path) {
+  for (std::string& a : args)
+    if (a == "@") a = path;
+  return args;
+}
+
+TEST(CliOutputs, EveryFileOptionRefusesWhatCannotBeWritten) {
+  const std::string csv = write_temp("small.csv", real_rows(50));
+  const std::vector<std::pair<std::string, std::vector<std::string>>> options = {
+      {"--log", {"emulate", "--duration", "0.01", "--log", "@"}},
+      {"--lcm-log", {"emulate", "--duration", "0.01", "--lcm-log", "@"}},
+      {"--log", {"serve", "--duration", "0.01", "--log", "@"}},
+      {"--csv", {"serve", "--duration", "0.01", "--csv", "@"}},
+      {"--csv", {"replay", emulated_lcm_log(), "--csv", "@"}},
+      {"--out", {"log", "export", emulated_lcm_log(), "--out", "@"}},
+      {"--out", {"log", "import", csv, "--out", "@"}},
+      {"--json", {"gap", "--log", kRealLog, "--json", "@"}},
+      {"--points", {"workspace", "--samples", "100", "--out", (temp_dir() / "ws").string(), "--points", "@"}},
+  };
+  for (const BadPath& bad : bad_files())
+    for (const auto& [option, args] : options)
+      expect_usage_error({with_path(args, bad.path), {option + " " + bad.path + ": ", bad.fragment}});
+}
+
+TEST(CliOutputs, EveryDirectoryOptionRefusesWhatCannotBeWrittenInto) {
+  const std::string scene_scenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/medical/ultrasound_abdomen_scan.yaml";
+  const std::vector<std::pair<std::string, std::vector<std::string>>> options = {
+      {"--report", {"emulate", scene_scenario, "--duration", "0.01", "--report", "@"}},
+      {"--report", {"gap", "--log", kRealLog, "--report", "@"}},
+      {"--out", {"workspace", "--samples", "100", "--out", "@"}},
+      {"--out", {"demo", "--samples", "100", "--out", "@"}},
+      {"--out", {"plan", "check", kRealLog, "--scene", "ultrasound_abdomen", "--out", "@"}},
+      {"--out", {"plan", "transfer", "--scene", "ultrasound_abdomen", "--from", "ready", "--to", "ready", "--out", "@"}},
+  };
+  for (const BadPath& bad : bad_directories())
+    for (const auto& [option, args] : options)
+      expect_usage_error({with_path(args, bad.path), {option + " " + bad.path + ": ", bad.fragment}});
+}
+
+// The issue's reproductions: the CSV writer aborted on /proc/self/mem (SIGABRT), and `csp workspace
+// --points /dev/full` printed two lines.
+TEST(CliOutputs, ProcSelfMemAndDevFullAreOneClearError) {
+  expect_usage_error({{"emulate", "--log", "/proc/self/mem"}, {"--log /proc/self/mem: ", "/proc or /sys entry"}});
+  expect_usage_error({{"log", "export", emulated_lcm_log(), "--out", "/proc/self/mem"}, {"--out /proc/self/mem: "}});
+  expect_usage_error({{"workspace", "--samples", "1000", "--out", (temp_dir() / "ws").string(), "--points", "/dev/full"},
+                      {"--points /dev/full: ", "not a regular file"}});
+}
+
+// A refused command touches no file: an output given before the bad one keeps what it held.
+TEST(CliOutputs, ARefusedCommandLeavesEveryFileAsItWas) {
+  const std::string kept = write_temp("kept.csv", "what was logged before\n");
+  expect_usage_error({{"emulate", "--duration", "0.01", "--log", kept, "--lcm-log", "/dev/full"}, {"--lcm-log"}});
+  expect_usage_error({{"emulate", "--duration", "0.01", "--log", kept, "--lcm-log", kept}, {"--lcm-log"}});
+  EXPECT_EQ(read_text(kept), "what was logged before\n");
+}
+
+// Two outputs naming one file (`csp emulate --log X --lcm-log X` wrote both logs into it), or an
+// output that is an input, are refused, however the paths are spelled.
+TEST(CliOutputs, TwoOutputsOrAnOutputAndAnInputAreNeverTheSameFile) {
+  const std::filesystem::path dir = temp_dir() / "same";
+  std::filesystem::create_directories(dir);
+  const std::string x = (dir / "x.log").string(), dotted = (dir / "." / "x.log").string();
+  expect_usage_error({{"emulate", "--duration", "0.01", "--log", x, "--lcm-log", x}, {"--lcm-log " + x + ": ", "the same file as --log"}});
+  expect_usage_error({{"emulate", "--duration", "0.01", "--log", x, "--lcm-log", dotted}, {"the same file as --log"}});
+  std::ofstream(x) << "existing\n";
+  const std::string link = (dir / "link.log").string();
+  std::filesystem::remove(link);
+  std::filesystem::create_symlink(x, link);
+  expect_usage_error({{"emulate", "--duration", "0.01", "--log", x, "--lcm-log", link}, {"the same file as --log"}});
+  expect_usage_error({{"serve", "--duration", "0.01", "--log", x, "--csv", x}, {"--csv", "the same file as --log"}});
+  const std::string out = (dir / "ws").string();
+  expect_usage_error({{"workspace", "--samples", "100", "--out", out, "--points", out + "/workspace_side.svg"},
+                      {"--points", "the same file as --out (its workspace_side.svg)"}});
+  expect_usage_error({{"gap", "--log", kRealLog, "--json", out + "/report.md", "--report", out},
+                      {"--json", "--report (its report.md)", "the same file as"}});
+  const std::string csv = write_temp("input.csv", real_rows(50));
+  expect_usage_error({{"gap", "--log", csv, "--json", csv}, {"--json", "is the input file (--log)"}});
+  expect_usage_error({{"replay", emulated_lcm_log(), "--csv", emulated_lcm_log()}, {"--csv", "is the input file (the log)"}});
+  const std::string scenario = write_temp("scenario.yaml", read_text(std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml"));
+  const std::string robots = std::string(CSP_SOURCE_DIR) + "/configs/robots/";
+  std::string text = read_text(scenario);
+  text.replace(text.find("../robots/"), 10, robots);
+  std::ofstream(scenario) << text;
+  expect_usage_error({{"emulate", scenario, "--duration", "0.01", "--log", scenario}, {"--log", "is the input file (the scenario)"}});
+  EXPECT_EQ(read_text(scenario), text);
+}
+
+// `csp workspace --samples` with a huge count ran without limit.
+TEST(CliOutputs, WorkspaceSamplesAreBounded) {
+  expect_usage_error({{"workspace", "--samples", "1000000000000"}, {"--samples", "1 to 1000000000", "got 1000000000000"}});
+  expect_usage_error({{"demo", "--samples", "1000000001"}, {"--samples", "1 to 1000000000"}});
+  expect_usage_error({{"workspace", "--samples", "0"}, {"--samples", "1 to 1000000000"}});
+}
+
+// ---------------------------------------------------------------------------------------------
+// Joint logs as input (issue 25): absurd sizes are refused at once with a message of bounded
+// length (a 10 MB column name took 46 s and printed a 10 MB line), and values must be physically
+// plausible (1e300 N m was diagnosed, exit 0).
+
+void expect_short_clear_error(const std::vector<std::string>& args, const std::vector<std::string>& fragments) {
+  SCOPED_TRACE(describe(args));
+  const auto start = std::chrono::steady_clock::now();
+  const Process run = run_csp(args);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(run.exit_code, 2) << run.err.substr(0, 2000);
+  EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err.substr(0, 2000);
+  EXPECT_LT(run.err.size(), 1000u) << run.err.substr(0, 2000);
+  EXPECT_LT(seconds, 10.0);
+  for (const std::string& fragment : fragments)
+    EXPECT_NE(run.err.find(fragment), std::string::npos) << "`" << fragment << "` not in: " << run.err.substr(0, 2000);
+}
+
+TEST(CliJointLogInput, AHugeColumnNameIsRefusedAtOnceInOneShortLine) {
+  std::string header = real_rows(0);
+  header.pop_back();
+  const std::string ten_mb = write_temp("huge_name.csv", header + ",x_" + std::string(10 << 20, 'a') + "\n" + real_rows(30).substr(real_rows(0).size()));
+  const std::string scenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/default.yaml";
+  // A scenario whose trajectory is that file (default.yaml with the robot file named by absolute path).
+  std::string text = read_text(scenario);
+  text.replace(text.find("../robots/"), 10, std::string(CSP_SOURCE_DIR) + "/configs/robots/");
+  const std::size_t from = text.find("  trajectory:\n"), to = text.find("external_wrenches:");
+  ASSERT_TRUE(from != std::string::npos && to != std::string::npos);
+  text.replace(from, to - from, "  trajectory: {file: " + ten_mb + "}\n");
+  const std::string with_trajectory = write_temp("huge_trajectory.yaml", text);
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"gap", "--log", ten_mb}, {"log", "import", ten_mb, "--out", (temp_dir() / "huge.lcmlog").string()},
+        {"plan", "check", ten_mb, "--scene", "ultrasound_abdomen"}, {"emulate", with_trajectory, "--duration", "0.01"}})
+    expect_short_clear_error(args, {ten_mb + ":1: ", "longer than 1048576 bytes"});
+  // Below the line bound: the name's own bound, the name quoted short with its size.
+  const std::string hundred_kb = write_temp("long_name.csv", header + ",q_" + std::string(100'000, 'b') + "\n");
+  expect_short_clear_error({"gap", "--log", hundred_kb}, {hundred_kb + ":1: column 23: ", "100002 bytes", "(at most 256)"});
+  // A huge field in a row.
+  std::string rows = real_rows(5);
+  rows.insert(rows.find('\n') + 1, std::string(100'000, '1'));
+  const std::string field = write_temp("long_field.csv", rows);
+  expect_short_clear_error({"gap", "--log", field}, {field + ":2: column 1 (t): ", "a value of 100003 bytes", "(100003 bytes)"});
+}
+
+// Replaces column `column` (0-based) of data row `row` (1-based) of `text`.
+std::string with_field(std::string text, std::size_t row, std::size_t column, const std::string& value) {
+  std::size_t at = 0;
+  for (std::size_t line = 0; line < row; ++line) at = text.find('\n', at) + 1;
+  for (std::size_t c = 0; c < column; ++c) at = text.find(',', at) + 1;
+  const std::size_t end = text.find_first_of(",\n", at);
+  return text.replace(at, end - at, value);
+}
+
+TEST(CliJointLogInput, ImplausibleValuesAreRefusedNamingLineAndColumn) {
+  const std::string rows = real_rows(1500);
+  const std::string torque = write_temp("torque.csv", with_field(rows, 500, 15, "1e300"));
+  expect_short_clear_error({"gap", "--log", torque}, {torque + ":501: column 16 (tau_J1): ", "1e+300 N m is not physically plausible",
+                                                      "|tau_J1| <= 1000 N m"});
+  const std::string velocity = write_temp("velocity.csv", with_field(rows, 20, 9, "-3e5"));
+  expect_short_clear_error({"gap", "--log", velocity}, {velocity + ":21: column 10 (dq2): ", "|dq2| <= 50 rad/s"});
+  const std::string position = write_temp("position.csv", with_field(rows, 7, 3, "1e9"));
+  expect_short_clear_error({"log", "import", position, "--out", (temp_dir() / "p.lcmlog").string()},
+                           {position + ":8: column 4 (q3): ", "|q3| <= 10 rad"});
+}
+
+// A 1500-row log that `csp gap` refused for a jump in time was told "expected at least 2 rows".
+TEST(CliJointLogInput, GapNamesTheRealReasonForARefusedLog) {
+  const std::string rows = real_rows(1500);
+  const std::string jump = write_temp("jump.csv", with_field(rows, 1500, 0, "100"));
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"gap", "--log", jump}, {"gap", "--log", jump, "--keep-idle"}}) {
+    expect_short_clear_error(args, {jump + ": the time jumps by", "to 100 s", "smoothing filter's window"});
+    EXPECT_EQ(run_csp(args).err.find("at least 2"), std::string::npos);
+  }
+  const std::string far = write_temp("far.csv", with_field(rows, 1500, 0, "1e7"));   // (its grid took all memory: bad_alloc)
+  expect_short_clear_error({"gap", "--log", far}, {far + ": the time jumps by"});
+  // A part too short for the filter is named as the part it is.
+  expect_short_clear_error({"gap", "--log", write_temp("short_part.csv", real_rows(1500)), "--train-fraction", "0.02", "--keep-idle"},
+                           {"(its first 2 % of time: the training part): too short for the smoothing filter"});
 }
 
 TEST(CliHelp, ExitsZero) {

@@ -3,6 +3,8 @@
 // crashed liblcm's reader; a log cut short replayed "bit for bit" from 59 of 501 states).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 
@@ -10,6 +12,7 @@
 #include "csp/bridge/csv_convert.hpp"
 #include "csp/bridge/replay.hpp"
 #include "csp/rt/controllers.hpp"
+#include "csp/rt/csv_log.hpp"
 
 namespace csp::bridge {
 namespace {
@@ -144,14 +147,130 @@ TEST(LogDamage, ReplayCommandExitsNonZeroOnADamagedLog) {
 }
 
 // A log that cannot be written is named as such and stops the run cleanly (it was reported as a
-// reflex with an empty reason).
-TEST(LogDamage, EmulateNamesAWriteErrorAndStops) {
+// reflex with an empty reason), as every other error is: one line on stderr, exit 2 (it was a line
+// on stdout and exit 1). A device is refused before the run; a write that fails during the run
+// (here the file size limit, as a full disk would) ends it, and the log keeps every whole row.
+
+// `csp args...` under a file size limit of 64 kB (a write past it fails with EFBIG, as on a full
+// disk), stdout to `out` and stderr to `err`; returns the exit status.
+int csp_with_file_limit(const std::vector<std::string>& args, const std::string& out, const std::string& err) {
+  std::vector<std::string> argv = {"/bin/sh", "-c", "ulimit -f 128; trap '' XFSZ; exec \"$@\" 2>\"$ERR\"", "sh", CSP_EXECUTABLE};
+  argv.insert(argv.end(), args.begin(), args.end());
+  ::setenv("ERR", err.c_str(), 1);
+  test::Process run(argv, out);
+  const int status = run.wait(std::chrono::seconds(120));
+  ::unsetenv("ERR");
+  return status;
+}
+
+std::string text_of(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+TEST(LogDamage, EmulateRefusesADeviceBeforeTheRun) {
   test::Process emulate({CSP_EXECUTABLE, "emulate", "--duration", "1", "--log", "/dev/full"}, test::temp_path("full.out"));
-  EXPECT_EQ(emulate.wait(std::chrono::seconds(60)), 1);
+  EXPECT_EQ(emulate.wait(std::chrono::seconds(60)), 2);
   const std::string out = emulate.output();
-  EXPECT_NE(out.find("STOPPED at t = "), std::string::npos) << out;
-  EXPECT_NE(out.find("writing the log failed"), std::string::npos) << out;
-  EXPECT_EQ(out.find("REFLEX"), std::string::npos) << out;
+  EXPECT_EQ(out, "csp emulate: --log /dev/full: is not a regular file (a device, FIFO or socket); give a file on a disk\n");
+}
+
+TEST(LogDamage, EmulateNamesAWriteErrorOnStderrAndKeepsTheWholeRows) {
+  const std::string csv = test::temp_path("limited.csv"), out = test::temp_path("limited.out"), err = test::temp_path("limited.err");
+  EXPECT_EQ(csp_with_file_limit({"emulate", "--duration", "2", "--log", csv}, out, err), 2);
+  const std::string stdout_text = text_of(out), stderr_text = text_of(err);
+  EXPECT_NE(stdout_text.find("STOPPED at t = "), std::string::npos) << stdout_text;
+  EXPECT_NE(stdout_text.find("ran "), std::string::npos) << stdout_text;   // the summary
+  EXPECT_EQ(stdout_text.find("REFLEX"), std::string::npos) << stdout_text;
+  EXPECT_EQ(stderr_text, "csp emulate: " + csv + ": writing the log failed (File too large); the file ends at its last complete row\n");
+  // Nothing written is lost: the file is the rows before the failure, each whole.
+  const std::string text = text_of(csv);
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.back(), '\n');
+  EXPECT_GT(text.size(), 32u * 1024);
+  EXPECT_GT(read_joint_log_csv(csv).size(), 10u);
+
+  const std::string lcm = test::temp_path("limited.lcmlog");
+  EXPECT_EQ(csp_with_file_limit({"emulate", "--duration", "2", "--lcm-log", lcm}, out, err), 2);
+  const std::string lcm_error = text_of(err);
+  EXPECT_NE(lcm_error.find(lcm + ": writing the LCM log failed (File too large)"), std::string::npos) << lcm_error;
+  EXPECT_EQ(std::count(lcm_error.begin(), lcm_error.end(), '\n'), 1) << lcm_error;
+  LogReader log(lcm);
+  uint64_t events = 0;
+  while (log.next()) ++events;
+  EXPECT_GT(events, 10u);
+  EXPECT_TRUE(log.damage().empty()) << log.damage_summary();
+
+  // The other commands with a per-cycle CSV log say it the same way.
+  const std::string recording = emulate_log("to-replay.lcmlog", 2.0);
+  EXPECT_EQ(csp_with_file_limit({"replay", recording, "--csv", csv}, out, err), 2);
+  EXPECT_EQ(text_of(err), "csp replay: " + csv + ": writing the log failed (File too large); the file ends at its last complete row\n");
+  EXPECT_EQ(text_of(out).find("identical"), std::string::npos) << text_of(out);
+  for (const std::string& f : {csv, out, err, lcm, recording}) std::filesystem::remove(f);
+}
+
+// `csp replay --play` of an empty file said "published 0 events" and exited 0.
+TEST(LogDamage, PlayingBackNothingIsAnError) {
+  const std::string empty = test::temp_path("empty.lcmlog");
+  std::ofstream(empty).close();
+  test::Process play({CSP_EXECUTABLE, "replay", "--play", "--lcm-url", test::unique_lcm_url(6), empty}, test::temp_path("empty.out"));
+  EXPECT_EQ(play.wait(std::chrono::seconds(60)), 2);
+  EXPECT_EQ(play.output(), "csp replay: " + empty + ": no event to publish (an empty log)\n");
+  std::filesystem::remove(empty);
+}
+
+// A re-simulation that compared no state is never "identical, bit for bit" (it was, exit 0).
+TEST(LogDamage, NoStateComparedIsNeverIdentical) {
+  const std::string path = emulate_log("stopped.lcmlog", 0.05);
+  const Recording recording(path);
+  rt::Emulator robot(recording.scenario.emulator);
+  const std::atomic<bool> stop = true;
+  ResimulationOptions options;
+  options.stop = &stop;
+  const ResimulationReport r = resimulate(recording, robot, options);
+  EXPECT_EQ(r.states, 0u);
+  EXPECT_FALSE(r.identical());
+  EXPECT_FALSE(ResimulationReport{}.identical());
+  std::filesystem::remove(path);
+}
+
+// One reader rule for a log's robot states (read_state_event): `csp log export` dropped a state
+// with a bad fingerprint silently (exit 0) while `csp replay` refused the file. Both name the same
+// event now, export exits 1 having written the other states, replay and gap refuse the log.
+TEST(LogDamage, ExportReplayAndGapRefuseTheSameStateEvent) {
+  const std::string path = emulate_log("fingerprint.lcmlog", 0.1);
+  std::vector<std::pair<uint64_t, int64_t>> states;   // byte offset of each state event's data, its event number
+  {
+    LogReader log(path);
+    uint64_t offset = 0;
+    for (const LogEvent* e = log.next(); e; e = log.next()) {
+      if (e->channel == "CSP_STATE") states.emplace_back(offset + 28 + e->channel.size(), e->eventnum);
+      offset = log.offset();
+    }
+  }
+  ASSERT_GT(states.size(), 10u);
+  const auto [data_at, eventnum] = states[5];
+  overwrite(path, static_cast<std::streamoff>(data_at), {0, 0, 0, 0, 0, 0, 0, 0});   // its fingerprint
+  const std::string refused = "event " + std::to_string(eventnum) + " on CSP_STATE is not a robot_state_t (unknown type (fingerprint mismatch))";
+
+  const std::string csv = test::temp_path("fingerprint.csv");
+  test::Process exported({CSP_EXECUTABLE, "log", "export", path, "--out", csv}, test::temp_path("export.out"));
+  EXPECT_EQ(exported.wait(std::chrono::seconds(60)), 1);
+  EXPECT_NE(exported.output().find(path + ": " + refused + ": only the readable states were exported"), std::string::npos)
+      << exported.output();
+  EXPECT_EQ(read_joint_log_csv(csv).size(), states.size() - 1);
+
+  test::Process replay({CSP_EXECUTABLE, "replay", path}, test::temp_path("replay.out"));
+  EXPECT_EQ(replay.wait(std::chrono::seconds(60)), 2);
+  EXPECT_NE(replay.output().find(path + ": " + refused), std::string::npos) << replay.output();
+
+  try {
+    read_joint_log_lcm(path, "CSP_STATE");
+    FAIL() << "expected an error";
+  } catch (const JointLogError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": " + refused), std::string::npos) << e.what();
+  }
+  for (const std::string& f : {path, csv}) std::filesystem::remove(f);
 }
 
 // Ctrl-C ends `csp emulate` with its summary and whole logs: the LCM log reads without damage and

@@ -21,8 +21,8 @@ ExportReport for_each_logged_state(const std::string& log_path, const std::strin
     if (log.events() % 4096 == 0) csp::report(progress, "reading the log (MB)", 1e-6 * log.offset(), 1e-6 * log.size());
     if (event->channel != state_channel) continue;
     robot_state_t m;
-    if (decode_exact(event->data, event->datalen, m) != Rejection::kNone) {
-      ++report.rejected;
+    if (std::string refused = read_state_event(*event, m); !refused.empty()) {
+      if (report.rejected++ == 0) report.refused = log_path + ": " + refused;
       continue;
     }
     std::string differing_field;
@@ -41,7 +41,8 @@ ExportReport for_each_logged_state(const std::string& log_path, const std::strin
 }
 
 bool is_lcm_log(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) return false;   // never open a FIFO: it would wait for a writer
+  std::error_code error;   // (a path that cannot be reached is no LCM log: its reader names the problem)
+  if (!std::filesystem::is_regular_file(path, error)) return false;   // never open a FIFO: it would wait for a writer
   std::ifstream in(path, std::ios::binary);
   unsigned char magic[4] = {};
   in.read(reinterpret_cast<char*>(magic), sizeof(magic));
@@ -52,7 +53,7 @@ bool is_lcm_log(const std::string& path) {
 ExportReport export_csv(const std::string& log_path, const std::string& csv_path, const std::string& state_channel,
                         const Progress& progress) {
   rt::CsvLog csv(csv_path);
-  return for_each_logged_state(
+  const ExportReport report = for_each_logged_state(
       log_path, state_channel,
       [&](const rt::RobotState& state, bool command_received) {
         rt::CycleInfo cycle;
@@ -60,6 +61,8 @@ ExportReport export_csv(const std::string& log_path, const std::string& csv_path
         csv.write(state, cycle);
       },
       progress);
+  csv.flush();   // the last rows: a write error is the export's error
+  return report;
 }
 
 JointLog read_joint_log_lcm(const std::string& log_path, const std::string& state_channel, const Progress& progress) {
@@ -70,6 +73,9 @@ JointLog read_joint_log_lcm(const std::string& log_path, const std::string& stat
       [&](const rt::RobotState& state, bool command_received) { rt::append_state(log, state, command_received); }, progress);
   if (!read.damage.empty())
     throw JointLogError(read.damage + "; `csp log export` writes the readable part as CSV if that is what you want to diagnose");
+  if (!read.refused.empty())
+    throw JointLogError(read.refused + (read.rejected > 1 ? " (and " + std::to_string(read.rejected - 1) + " more)" : "") +
+                        "; `csp log export` writes the other states as CSV if that is what you want to diagnose");
   if (log.size() < 2)
     throw JointLogError(log_path + ": expected at least 2 robot states on channel " + state_channel + ", got " +
                         std::to_string(log.size()));
@@ -92,6 +98,7 @@ uint64_t import_csv(const std::string& csv_path, const std::string& log_path, co
     m.message_id = static_cast<int64_t>(row);   // unique per row: two rows may fall in the same millisecond
     log.write(state_channel, encode(m), utime);
   }
+  log.flush();   // the last events: a write error is the import's error
   return csv.size();
 }
 

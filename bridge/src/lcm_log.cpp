@@ -4,11 +4,14 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 
+#include "csp/io/joint_log.hpp"   // output_file_problem
 #include "csp/io/yaml_field.hpp"
 
 namespace csp::bridge {
@@ -49,37 +52,42 @@ uint64_t big_endian(const uint8_t* bytes, int count) {
 
 }  // namespace
 
-LogWriter::LogWriter(const std::string& path) : path_(path), file_(std::make_unique<lcm::LogFile>(path, "w")) {
-  if (!file_->good()) throw std::runtime_error(path + ": cannot write the LCM log");
+LogWriter::LogWriter(const std::string& path) : path_(path) {
+  if (const std::string problem = output_file_problem(path); !problem.empty())
+    throw std::runtime_error(path + ": cannot write the LCM log: " + problem);
+  file_ = std::make_unique<lcm::LogFile>(path, "w");
+  if (!file_->good()) throw std::runtime_error(path + ": cannot write the LCM log (" + std::strerror(errno) + ")");
 }
 
 void LogWriter::write(const std::string& channel, const void* data, int size, int64_t utime) {
-  if (!file_) throw std::runtime_error(path_ + ": the LCM log was closed after a write error");
+  if (!file_) throw std::runtime_error(failure_.empty() ? path_ + ": the LCM log was closed" : failure_);
   lcm::LogEvent event{};
   event.timestamp = utime;
   event.channel = channel;
   event.datalen = size;
   event.data = const_cast<void*>(data);   // LogFile::writeEvent does not write through it
-  if (file_->writeEvent(&event) != 0) fail_write();
+  if (file_->writeEvent(&event) != 0) fail_write(errno);
   ++counts_[channel];
   ++events_;
 }
 
-void LogWriter::fail_write() {
+void LogWriter::fail_write(int error) {
   // Part of an event may have reached the file: cut it after the last whole event, so that what
-  // was written stays a valid log (a regular file; a device such as /dev/full holds nothing).
+  // was written stays a valid log (the constructor took only a regular file on a disk).
   file_.reset();
-  std::error_code error;
-  if (std::filesystem::is_regular_file(path_, error)) {
+  std::error_code code;
+  try {
     LogReader written(path_);
     while (written.next()) {
     }
     const std::vector<LogDamage>& damage = written.damage();
-    if (!damage.empty() && damage.back().offset + damage.back().bytes_skipped == std::filesystem::file_size(path_, error))
-      std::filesystem::resize_file(path_, damage.back().offset, error);
+    if (!damage.empty() && damage.back().offset + damage.back().bytes_skipped == std::filesystem::file_size(path_, code))
+      std::filesystem::resize_file(path_, damage.back().offset, code);
+  } catch (const std::exception&) {   // unreadable now: the file stays as the system left it
   }
-  throw std::runtime_error(path_ + ": writing the LCM log failed (disk full or the file system refused it); the file ends "
-                           "at its last whole event");
+  failure_ = path_ + ": writing the LCM log failed (" + (error != 0 ? std::strerror(error) : "disk full or the file system refused it") +
+             "); the file ends at its last whole event";
+  throw std::runtime_error(failure_);
 }
 
 uint64_t LogWriter::count(const std::string& channel) const {
@@ -88,7 +96,11 @@ uint64_t LogWriter::count(const std::string& channel) const {
 }
 
 void LogWriter::flush() {
-  if (file_ && std::fflush(file_->getFilePtr()) != 0) fail_write();
+  if (!file_) {
+    if (!failure_.empty()) throw std::runtime_error(failure_);
+    return;
+  }
+  if (std::fflush(file_->getFilePtr()) != 0) fail_write(errno);
 }
 
 LogReader::LogReader(const std::string& path) : path_(path) {
@@ -169,6 +181,13 @@ std::string LogReader::damage_summary() const {
             std::to_string(damage_[i].bytes_skipped) + " bytes skipped";
   }
   return text + ")";
+}
+
+std::string read_state_event(const LogEvent& event, robot_state_t& state) {
+  const Rejection rejection = decode_exact(event.data, event.datalen, state);
+  if (rejection == Rejection::kNone) return {};
+  return "event " + std::to_string(event.eventnum) + " on " + event.channel + " is not a robot_state_t (" +
+         rejection_name(rejection) + ")";
 }
 
 scenario_t scenario_message(const rt::Scenario& scenario, const std::string& channel_prefix) {

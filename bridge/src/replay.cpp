@@ -119,8 +119,8 @@ ResimulationReport resimulate(const Recording& recording, rt::Emulator& robot, c
       ++report.messages;
     } else if (event->channel == channels.state) {
       robot_state_t recorded;
-      if (decode_exact(event->data, event->datalen, recorded) != Rejection::kNone)
-        throw std::runtime_error(log_path + ": event " + std::to_string(event->eventnum) + " on " + event->channel + " is not a robot_state_t");
+      if (const std::string refused = read_state_event(*event, recorded); !refused.empty())
+        throw std::runtime_error(log_path + ": " + refused + "; `csp log export` writes the other states as CSV");
       // The message id is the robot's time: a state that says otherwise is not one of this run (and
       // its id must not make the robot run to it).
       if (recorded.message_id != recorded.time)

@@ -941,8 +941,14 @@ Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog
 Diagnosis diagnose(const Model& model, const JointLog& log, const DiagnosisOptions& options) {
   if (!(options.train_fraction > 0.0 && options.train_fraction < 1.0))
     throw std::invalid_argument("training fraction must be between 0 and 1");
+  check_time_steps(log, options.filter);   // a gap in time, named on the whole log before it is split
   const double split = log.t.front() + options.train_fraction * (log.t.back() - log.t.front());
-  return diagnose(model, slice(log, log.t.front(), split), slice(log, split, log.t.back() + 1.0), options);
+  JointLog train = slice(log, log.t.front(), split), heldout = slice(log, split, log.t.back() + 1.0);
+  // Each part's messages (too short for the filter) name the part, not only the file.
+  const int percent = static_cast<int>(std::lround(100.0 * options.train_fraction));
+  train.source = log.source + " (its first " + std::to_string(percent) + " % of time: the training part)";
+  heldout.source = log.source + " (its last " + std::to_string(100 - percent) + " % of time: the held-out part)";
+  return diagnose(model, train, heldout, options);
 }
 
 nlohmann::json to_json(const Diagnosis& d) {

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "csp/io/svg_plot.hpp"   // format
+
 namespace csp::gap {
 
 SavitzkyGolay::SavitzkyGolay(int half_width, int order, double dt) : half_width_(half_width) {
@@ -54,13 +56,37 @@ std::vector<Vector7> resample(const std::vector<double>& t, const std::vector<Ve
 
 }  // namespace
 
-Samples filter_log(const JointLog& log, const FilterOptions& options) {
+double check_time_steps(const JointLog& log, const FilterOptions& options) {
+  if (log.size() < 2) throw JointLogError(log.source + ": expected at least 2 rows, got " + std::to_string(log.size()));
+  // A step longer than the filter's window would be bridged by a straight line the filter takes
+  // for motion: a gap in the recording (a pause, two logs joined), not samples of one motion.
+  std::size_t widest = 0;
+  std::vector<double> steps(log.size() - 1);
+  for (std::size_t k = 0; k + 1 < log.size(); ++k) {
+    steps[k] = log.t[k + 1] - log.t[k];
+    if (steps[k] > steps[widest]) widest = k;
+  }
+  if (steps[widest] > options.window)
+    throw JointLogError(log.source + ": the time jumps by " + format("%g", steps[widest]) + " s from t = " +
+                        format("%g", log.t[widest]) + " s to " + format("%g", log.t[widest + 1]) +
+                        " s, more than the smoothing filter's window (" + format("%g", options.window) +
+                        " s): a gap in the recording, which the filter would bridge with a straight line; give the "
+                        "log without it (one log per stretch of recording)");
   // Grid spacing: the median time step (robust to the jitter and gaps of real logs).
-  std::vector<double> steps(log.size() > 1 ? log.size() - 1 : 0);
-  for (std::size_t k = 0; k + 1 < log.size(); ++k) steps[k] = log.t[k + 1] - log.t[k];
-  if (steps.empty()) throw JointLogError(log.source + ": expected at least 2 rows");
-  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
   const double dt = steps[steps.size() / 2];
+  // The grid holds about one point per row when the steps are about even; many more means most
+  // steps are far shorter than the others (rows bunched in time), which no robot's log is.
+  const double points = std::floor((log.t.back() - log.t.front()) / dt) + 1;
+  if (points > 4.0 * static_cast<double>(log.size()))
+    throw JointLogError(log.source + ": the time steps are too uneven for a uniform grid: at the median step of " +
+                        format("%g", dt) + " s the " + std::to_string(log.size()) + " rows span " +
+                        format("%.0f", points) + " grid points (more than 4 per row)");
+  return dt;
+}
+
+Samples filter_log(const JointLog& log, const FilterOptions& options) {
+  const double dt = check_time_steps(log, options);
   const std::size_t n = static_cast<std::size_t>(std::floor((log.t.back() - log.t.front()) / dt)) + 1;
   const int half_width = std::max(options.order / 2 + 1, static_cast<int>(std::lround(0.5 * options.window / dt)));
   const std::size_t stride =

@@ -21,7 +21,7 @@ std::string errors_text(const ErrorSet& errors) {
 
 ErrorSet errors_from_text(const std::string& text, const std::string& where) {
   if (text.size() < 2 || text.front() != '[' || text.back() != ']')
-    throw JointLogError(where + "current_errors: expected [name1|name2] or [], got `" + text + "`");
+    throw JointLogError(where + "current_errors: expected [name1|name2] or [], got " + quote_input(text));
   ErrorSet errors;
   const std::string names = text.substr(1, text.size() - 2);
   for (std::size_t begin = 0; begin < names.size();) {
@@ -30,7 +30,7 @@ ErrorSet errors_from_text(const std::string& text, const std::string& where) {
     int found = -1;
     for (int i = 0; i < kNumErrors; ++i)
       if (name == error_name(static_cast<Error>(i))) found = i;
-    if (found < 0) throw JointLogError(where + "current_errors: unknown error name `" + name + "` (libfranka's franka::Errors)");
+    if (found < 0) throw JointLogError(where + "current_errors: unknown error name " + quote_input(name) + " (libfranka's franka::Errors)");
     errors.set(static_cast<Error>(found));
     begin = end + 1;
   }
@@ -41,7 +41,7 @@ RobotMode robot_mode_from_name(const std::string& name, const std::string& where
   for (const RobotMode mode : {RobotMode::kOther, RobotMode::kIdle, RobotMode::kMove, RobotMode::kGuiding, RobotMode::kReflex,
                                RobotMode::kUserStopped, RobotMode::kAutomaticErrorRecovery})
     if (name == robot_mode_name(mode)) return mode;
-  throw JointLogError(where + "robot_mode: unknown mode `" + name + "` (libfranka's franka::RobotMode)");
+  throw JointLogError(where + "robot_mode: unknown mode " + quote_input(name) + " (libfranka's franka::RobotMode)");
 }
 
 // The groups that are a RobotState array as it is: one list for both directions of the mapping.
@@ -102,13 +102,7 @@ RobotState state_from_row(const JointLog& log, std::size_t row) {
 
 CsvLog::CsvLog(const std::string& path) : row_(state_layout()), writer_(path, row_) { row_.clear_rows(); }
 
-CsvLog::~CsvLog() {
-  // A destructor must not throw: a write error here was (or will be) reported by write().
-  try {
-    writer_.flush();
-  } catch (const JointLogError&) {
-  }
-}
+void CsvLog::flush() { writer_.flush(); }
 
 void CsvLog::write(const RobotState& state, const CycleInfo& cycle) {
   row_.clear_rows();

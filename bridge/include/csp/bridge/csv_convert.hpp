@@ -17,15 +17,16 @@ namespace csp::bridge {
 struct ExportReport {
   uint64_t rows = 0;
   uint64_t repeated = 0;    // states published again while the robot waited (same message_id): skipped
-  uint64_t rejected = 0;    // events on the state channel that are not a robot_state_t
+  uint64_t rejected = 0;    // events on the state channel that are not a robot_state_t (read_state_event)
+  std::string refused;      // the first of them, as read_state_event names it; empty if none
   std::string damage;       // LogReader::damage_summary(): empty for an intact log
   std::string missing;      // StateCoverage::missing(): the states a recording misses; empty if none
 };
 
 // Calls `visit(state, command_received)` for every robot state on `state_channel` of an LCM log,
 // in order, once each: a state published again unchanged (same message_id; utime aside) is
-// skipped, an event that does not decode as robot_state_t counted as rejected. `progress`: MB of
-// the log read.
+// skipped, an event that is no robot state (read_state_event, the rule csp replay applies too)
+// counted as rejected and the first named. `progress`: MB of the log read.
 ExportReport for_each_logged_state(const std::string& log_path, const std::string& state_channel,
                                    const std::function<void(const rt::RobotState&, bool command_received)>& visit,
                                    const Progress& progress = {});
@@ -34,13 +35,16 @@ ExportReport for_each_logged_state(const std::string& log_path, const std::strin
 // whatever its name.
 bool is_lcm_log(const std::string& path);
 
-// Writes every state on `state_channel` (default CSP_STATE) as one CSV row (rt::CsvLog).
+// Writes every state on `state_channel` (default CSP_STATE) as one CSV row (rt::CsvLog). The
+// report says what it could not export (damage, refused events): `csp log export` names it and
+// exits 1.
 ExportReport export_csv(const std::string& log_path, const std::string& csv_path, const std::string& state_channel,
                         const Progress& progress = {});
 
 // The states on `state_channel` as a joint log, checked as a CSV joint log is (check_joint_log);
-// throws JointLogError naming the file when the channel holds fewer than 2 states or the log is
-// damaged (a diagnosis must not run on a log with holes it does not know of).
+// throws JointLogError naming the file when the channel holds fewer than 2 states, the log is
+// damaged or an event on the channel is no robot state (a diagnosis must not run on a log with
+// holes it does not know of).
 JointLog read_joint_log_lcm(const std::string& log_path, const std::string& state_channel, const Progress& progress = {});
 
 // Reads a CSV joint log (read_joint_log_csv) and writes one robot_state_t per row on

@@ -16,9 +16,13 @@
 
 namespace csp::bridge {
 
+// A write error (disk full, a file size limit) throws std::runtime_error naming the file and the
+// system's reason; the file then ends at its last whole event and takes no more.
 class LogWriter {
  public:
-  explicit LogWriter(const std::string& path);   // throws std::runtime_error naming the file
+  // Throws std::runtime_error naming the file if it is no file to write (output_file_problem: a
+  // device, a /proc entry, a directory, ...) or cannot be opened.
+  explicit LogWriter(const std::string& path);
   void write(const std::string& channel, const void* data, int size, int64_t utime);
   void write(const std::string& channel, const std::vector<uint8_t>& bytes, int64_t utime) {
     write(channel, bytes.data(), static_cast<int>(bytes.size()), utime);
@@ -27,12 +31,13 @@ class LogWriter {
   uint64_t count(const std::string& channel) const;
   uint64_t events() const { return events_; }
   const std::string& path() const { return path_; }
-  void flush();
+  void flush();   // throws as write does (the last events reach the file when it closes otherwise)
 
  private:
-  [[noreturn]] void fail_write();
+  [[noreturn]] void fail_write(int error);
 
   std::string path_;
+  std::string failure_;   // the write error, once there was one
   std::unique_ptr<lcm::LogFile> file_;
   std::map<std::string, uint64_t> counts_;
   uint64_t events_ = 0;
@@ -89,6 +94,12 @@ class LogReader {
   std::vector<uint8_t> data_;
   std::vector<LogDamage> damage_;
 };
+
+// The one rule every reader of a log's robot states applies (csp replay, csp log export, csp gap
+// on an LCM log): an event on the state channel is a robot state if it decodes exactly as
+// robot_state_t (its fingerprint, its length). Decodes it into `state` and returns empty, or says
+// why not: "event 12 on CSP_STATE is not a robot_state_t (unknown type (fingerprint mismatch))".
+std::string read_state_event(const LogEvent& event, robot_state_t& state);
 
 // The scenario as a log records it: the scenario and robot files' texts and the effective seed.
 // `csp serve` publishes it at its start, every second of robot time and at its end, so that a
@@ -150,6 +161,7 @@ class EmulateLogRecorder {
   EmulateLogRecorder(const std::string& path, const rt::Scenario& scenario, const rt::Emulator& emulator, rt::ControlMode mode);
   void record(const rt::RobotState& state, const rt::CycleInfo& cycle);
   const LogWriter& log() const { return log_; }
+  void flush() { log_.flush(); }
 
  private:
   LogWriter log_;

@@ -25,8 +25,9 @@ struct ResimulationReport {
   // ids; StateCoverage), in one line; empty when it holds the run whole. The states it holds are
   // compared all the same: a missed state is re-simulated, a missed command shows as a difference.
   std::string missing;
-  // Bit for bit, and over the whole log: a damaged log is never reported identical.
-  bool identical() const { return differing_states == 0 && damage.empty(); }
+  // Bit for bit, and over the whole log: a damaged log, or one of which no state was compared, is
+  // never reported identical.
+  bool identical() const { return states > 0 && differing_states == 0 && damage.empty(); }
 };
 
 // A recording of a CSP session to re-simulate: a `csp serve --log`, `csp can serve --log` or

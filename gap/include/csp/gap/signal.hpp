@@ -58,7 +58,14 @@ struct Samples {
   std::vector<Vector7> smoothed(const std::vector<Vector7>& grid_series) const;
 };
 
-// Throws JointLogError when the log is too short for the filter window.
+// Checks that the log's time can be put on a uniform grid and returns its spacing, the median time
+// step. Throws JointLogError naming the log for fewer than 2 rows, a step longer than the filter's
+// window (a gap in the recording: the times where it is) and steps so uneven that the grid would
+// hold more than 4 points per row.
+double check_time_steps(const JointLog& log, const FilterOptions& options);
+
+// Throws JointLogError when the log's time fails check_time_steps or the log is too short for the
+// filter window.
 Samples filter_log(const JointLog& log, const FilterOptions& options);
 
 }  // namespace csp::gap

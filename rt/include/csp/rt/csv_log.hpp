@@ -1,7 +1,7 @@
 // The per-cycle CSV log of `csp emulate`, in the joint-log format (csp/io/joint_log.hpp,
 // docs/joint-log.md): t, q, dq, tau_J first as in the real Panda log, then the other groups the
-// robot state reports. The same run gives the same bytes. Rows are flushed when the log closes,
-// also when a controller failure unwinds.
+// robot state reports. The same run gives the same bytes. Each row reaches the file when it is
+// written (JointLogCsvWriter), also when a controller failure unwinds.
 #pragma once
 
 #include <string>
@@ -21,11 +21,13 @@ RobotState state_from_row(const JointLog& log, std::size_t row);
 class CsvLog {
  public:
   explicit CsvLog(const std::string& path);   // throws JointLogError if it cannot be written
-  ~CsvLog();
   CsvLog(const CsvLog&) = delete;
   CsvLog& operator=(const CsvLog&) = delete;
 
+  // Throw JointLogError naming the file when a write fails (JointLogCsvWriter: the file then ends
+  // at its last complete row); flush() again says so, at the end of a run.
   void write(const RobotState& state, const CycleInfo& cycle);
+  void flush();
   uint64_t rows() const { return rows_; }
   const std::string& path() const { return writer_.path(); }
 

@@ -31,6 +31,7 @@ class CsvLogObserver : public Observer {
   CsvLogObserver(const std::string& path, const rt::Emulator& emulator);
   void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override { log_.write(state, cycle); }
   const rt::CsvLog& log() const { return log_; }
+  void flush() { log_.flush(); }   // at the run's end: throws JointLogError if the last rows cannot be written
 
  private:
   rt::CsvLog log_;
@@ -47,6 +48,7 @@ class LcmLogObserver : public Observer {
       : recorder_(path, run.scenario(), run.emulator(), mode) {}
   void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override { recorder_.record(state, cycle); }
   uint64_t events() const { return recorder_.log().events(); }
+  void flush() { recorder_.flush(); }   // at the run's end: throws std::runtime_error if the last events cannot be written
 
  private:
   bridge::EmulateLogRecorder recorder_;
