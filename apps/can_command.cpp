@@ -2,13 +2,13 @@
 // SocketCAN (a run whose command source is the CAN bus); `csp can eds` and `csp can dbc` print the files generated from the drives' object table.
 #include <atomic>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
 
 #include "commands.hpp"
 #include "csp/can/export.hpp"
+#include "csp/io/svg_plot.hpp"
 #include "csp/run/can_source.hpp"
 #include "csp/run/observers.hpp"
 
@@ -34,13 +34,19 @@ int write_text(const std::string& text, const std::string& path) {
     std::cout << text;
     return 0;
   }
-  std::ofstream file(path);
-  if (!(file << text)) throw UsageError("--out " + path + ": cannot write the file");
+  Outputs().file("--out", path).check();
+  write_text_file(path, text);
   return 0;
 }
 
 int run_serve(const CanArguments& args) {
   const rt::Scenario scenario = args.scenario.load();
+  Outputs()
+      .file("--log", args.log)
+      .file("--csv", args.csv)
+      .input("the scenario", scenario.path)
+      .input("the scenario's robot file", scenario.robot_file)
+      .check();
   can::CanServeOptions options;
   options.interface = args.iface;
   options.split = args.split;
@@ -68,6 +74,7 @@ int run_serve(const CanArguments& args) {
   run::CanBusSource bus(options);
   // Ctrl-C / SIGTERM end the run cleanly: the logs keep every cycle run.
   const run::RunResult result = run.run(bus, &stop_on_signals());
+  const std::string log_failure = flush_logs(result.observer_failure, csv.get());   // (the LCM log: the CAN source)
 
   const can::CanServeReport& r = bus.report();
   print_timing(r.timing, "round trip SYNC -> enabled RPDOs");
@@ -101,7 +108,7 @@ int run_serve(const CanArguments& args) {
   if (!args.log.empty()) std::printf("  log: %s (%llu events)\n", args.log.c_str(), static_cast<unsigned long long>(r.log_events));
   if (csv) std::printf("  CSV log: %s (%llu rows)\n", args.csv.c_str(), static_cast<unsigned long long>(csv->log().rows()));
   // A signal is how a serve is meant to end: exit status 0.
-  return print_early_end(result.observer_failure, result.stopped, run.emulator().state().time.toSec(), 0).value_or(0);
+  return print_early_end(log_failure, result.stopped, run.emulator().state().time.toSec(), 0).value_or(0);
 }
 
 }  // namespace

@@ -162,6 +162,15 @@ inline const std::filesystem::path& temp_dir() {
   return directory.path;
 }
 
+// Writes `text` (bytes as they are) to a file of temp_dir() and returns its path.
+inline std::string write_temp(const std::string& file_name, const std::string& text) {
+  const std::string path = (temp_dir() / file_name).string();
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + path);
+  return path;
+}
+
 // A program run to its end: exit code, standard output, standard error.
 struct ProgramRun {
   int exit_code = -1;

@@ -418,12 +418,6 @@ std::string real_rows(std::size_t rows) {
   return text;
 }
 
-std::string write_temp(const std::string& name, const std::string& text) {
-  const std::string path = (temp_dir() / name).string();
-  std::ofstream(path, std::ios::binary) << text;
-  return path;
-}
-
 // An LCM log of a short run of the default scenario, written once.
 const std::string& emulated_lcm_log() {
   static const std::string path = [] {
@@ -477,6 +471,10 @@ TEST(CliOutputs, EveryFileOptionRefusesWhatCannotBeWritten) {
       {"--lcm-log", {"emulate", "--duration", "0.01", "--lcm-log", "@"}},
       {"--log", {"serve", "--duration", "0.01", "--log", "@"}},
       {"--csv", {"serve", "--duration", "0.01", "--csv", "@"}},
+      {"--log", {"can", "serve", "--duration", "0.01", "--log", "@"}},   // (checked before the CAN socket opens)
+      {"--csv", {"can", "serve", "--duration", "0.01", "--csv", "@"}},
+      {"--out", {"can", "eds", "--out", "@"}},
+      {"--out", {"can", "dbc", "--out", "@"}},
       {"--csv", {"replay", emulated_lcm_log(), "--csv", "@"}},
       {"--out", {"log", "export", emulated_lcm_log(), "--out", "@"}},
       {"--out", {"log", "import", csv, "--out", "@"}},

@@ -488,14 +488,6 @@ TEST(LimitViolations, Fr3VelocityBoundIsThePositionsOne) {
 // Validation: each rule rejects a broken copy of panda.yaml with a message naming the file, the
 // key path and what was expected.
 
-std::string write_temp(const std::string& file_name, const std::string& text) {
-  const std::string path = (temp_dir() / file_name).string();
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + path);
-  return path;
-}
-
 // One text edit: replace the first `from` after the first `after` (from the start if empty).
 struct Edit {
   std::string from, to, after = "";

@@ -439,22 +439,17 @@ class Fuzz:
         """Expedited download; the abort code or None. Frames seen meanwhile are kept."""
         command = 0x23 | (4 - size) << 2
         self.m.send(0x600 + node, struct.pack("<BHB", command, index, sub) + value.to_bytes(4, "little"))
-        return self.sdo_answer(node)
-
-    def sdo_answer(self, node):
-        deadline = time.monotonic() + 5
-        while time.monotonic() < deadline:
-            msg = self.m.recv(max(0.0, deadline - time.monotonic()))
-            if msg is None:
-                continue
-            self.frames.append(msg)
-            if msg.arbitration_id == 0x580 + node:
-                data = bytes(msg.data)
-                return struct.unpack_from("<I", data, 4)[0] if data[0] == 0x80 else None
-        raise TimeoutError("no SDO answer from node %d" % node)
+        data = self.sdo_reply(node)
+        return struct.unpack_from("<I", data, 4)[0] if data[0] == 0x80 else None
 
     def upload16(self, node, index):
+        """Expedited upload of a 16-bit object; None when aborted."""
         self.m.send(0x600 + node, struct.pack("<BHB4x", 0x40, index, 0))
+        data = self.sdo_reply(node)
+        return struct.unpack_from("<H", data, 4)[0] if data[0] != 0x80 else None
+
+    def sdo_reply(self, node):
+        """The node's next SDO response (its 8 data bytes); frames seen meanwhile are kept."""
         deadline = time.monotonic() + 5
         while time.monotonic() < deadline:
             msg = self.m.recv(max(0.0, deadline - time.monotonic()))
@@ -462,7 +457,7 @@ class Fuzz:
                 continue
             self.frames.append(msg)
             if msg.arbitration_id == 0x580 + node:
-                return struct.unpack_from("<H", bytes(msg.data), 4)[0] if msg.data[0] != 0x80 else None
+                return bytes(msg.data)
         raise TimeoutError("no SDO answer from node %d" % node)
 
     # --- steps
