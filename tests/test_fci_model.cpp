@@ -184,7 +184,7 @@ class FciModel : public ::testing::TestWithParam<std::string> {
                                                             : robot_parameters(GetParam());
   const FciModelLibrary library{library_file(robot_model, "fci_model_" + GetParam())};
   RandomStates random{20261129};
-  const int kStates = fewer_when_sanitized(20, 4);
+  static constexpr int kStates = 20;
 };
 
 // (a) Every function against CSP's dynamics computed directly: FK and Jacobians of the frames, M
