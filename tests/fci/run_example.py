@@ -71,7 +71,8 @@ def check_echo_robot_state(output, initial_q):
         q = state["q"]
         worst = max(abs(a - b) for a, b in zip(q, initial_q))
         if len(q) != 7 or worst > 1e-3:
-            raise CheckFailed(f"state {i}: q = {q} is not the scenario's initial_q {initial_q} (within 1e-3 rad)")
+            raise CheckFailed(f"state {i}: q = {q} is not the scenario's initial_q {initial_q} "
+                              "(within 1e-3 rad)")
         if state["robot_mode"] != "Idle":
             raise CheckFailed(f"state {i}: robot_mode is {state['robot_mode']!r}, expected 'Idle'")
         if state["current_errors"]:
@@ -219,15 +220,18 @@ def run_example(name, command, stop_after, time_limit):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--csp", required=True, help="the csp executable")
     parser.add_argument("--scenario", required=True, help="the scenario YAML csp fci emulates")
     parser.add_argument("--address", required=True, help="this test's own loopback address, 127.0.0.N")
-    parser.add_argument("--clock", choices=["realtime", "lockstep"], help="csp fci --clock (default: the scenario's)")
+    parser.add_argument("--clock", choices=["realtime", "lockstep"],
+                        help="csp fci --clock (default: the scenario's)")
     parser.add_argument("--realtime-kernel", action="store_true",
-                        help="show the example a /sys/kernel/realtime of 1 (libfranka's kEnforce; needs root)")
+                        help="show the example a /sys/kernel/realtime of 1 (kEnforce; needs root)")
     parser.add_argument("--stop-after", type=float, help="endless example: SIGINT after this many seconds")
-    parser.add_argument("--time-limit", type=float, default=120.0, help="seconds the example may take (default 120)")
+    parser.add_argument("--time-limit", type=float, default=120.0,
+                        help="seconds the example may take (default 120)")
     parser.add_argument("example", help="the example's executable")
     parser.add_argument("arguments", nargs="*", help="its arguments after the robot's address")
     options = parser.parse_args()
