@@ -9,7 +9,7 @@ robot's address as first argument (then ARGS) and a newline on stdin (the exampl
 stops the server with SIGINT and checks both: the server ends with exit 0, the example the way
 the check of its name (CHECKS below) expects. libfranka always connects to port 1337 (the gripper
 to 1338), so each test has its own loopback address: the tests run in parallel.
-Exit 0 when every check passes; otherwise 1, with one line saying what was wrong first.
+Exit 0 when every check passes; otherwise 1, the last line ("FAILED: ...") saying what was wrong.
 """
 import argparse
 import json
@@ -129,7 +129,6 @@ class Server:
     """`csp fci` in the background, its output collected line by line (a full pipe would block it)."""
 
     def __init__(self, command):
-        self.command = command
         self.lines = []
         self.listening = threading.Event()
         try:
