@@ -22,6 +22,7 @@ Command add_replay_command(CLI::App& app);
 Command add_log_command(CLI::App& app);
 Command add_gap_command(CLI::App& app);
 Command add_can_command(CLI::App& app);
+Command add_fci_command(CLI::App& app);
 Command add_plan_command(CLI::App& app);
 
 // The most samples `csp workspace` and `csp demo` take: a billion take about 7 minutes (400 ns

@@ -87,12 +87,9 @@ std::vector<uint8_t> encode_command_as(int64_t message_id, const rt::Command& co
 
 // A 4x4 column-major pose; throws if it is not a finite rigid transform.
 Transform transform_from(const double (&values)[16], const char* operation) {
-  const auto m = from_array<Eigen::Matrix4d>(values);
-  const Matrix3 rotation = m.topLeftCorner<3, 3>();
-  const bool rigid = m.allFinite() && m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
-                     (rotation.transpose() * rotation).isApprox(Matrix3::Identity(), 1e-6) && rotation.determinant() > 0.0;
-  if (!rigid) throw std::invalid_argument(std::string(operation) + ": expected a rigid transform (4x4 column-major, finite)");
-  return transform_from_matrix(m);
+  const std::optional<Transform> pose = rigid_transform_from_matrix(from_array<Eigen::Matrix4d>(values));
+  if (!pose) throw std::invalid_argument(std::string(operation) + ": expected a rigid transform (4x4 column-major, finite)");
+  return *pose;
 }
 
 }  // namespace

@@ -16,15 +16,13 @@ namespace {
 
 using rt::monotonic_ns;
 
-constexpr int64_t kCycleNs = rt::DeadlineClock::kPeriodNs;
-constexpr int64_t kRepublishNs = 10'000'000;   // lockstep: repeat a waiting state for late joiners
 constexpr uint64_t kStatusEvery = 100;         // cycles between status messages
 // Cycles between republications of the scenario record (about 16 kB: the scenario and robot files),
 // so that a recording begun after the start (lcm-logger) holds it: once a second of robot time.
 constexpr uint64_t kScenarioEvery = 1000;
 
 // The LCM side of one serve run: publication (and logging), reception into the RobotServer.
-class Bus {
+class Bus : public rt::MessageBus {
  public:
   Bus(rt::Emulator& robot, const rt::Scenario& scenario, const ServeOptions& options)
       : options_(options),
@@ -75,32 +73,18 @@ class Bus {
     ++state_messages_;
   }
 
-  // Handles messages until `done()` or the monotonic time `deadline_ns`; in lockstep the waiting
-  // state is repeated every 10 ms. Returns done().
-  template <typename Done>
-  bool pump_until(int64_t deadline_ns, bool republish, const Done& done) {
-    int64_t next_republish = monotonic_ns() + kRepublishNs;
-    while (!done() && !stopped()) {
-      const int64_t now = monotonic_ns();
-      if (now >= deadline_ns) return false;
-      if (republish && now >= next_republish) {
-        publish_state(true);
-        next_republish = now + kRepublishNs;
-      }
-      receive_for(std::min(deadline_ns, republish ? next_republish : deadline_ns) - now);
-    }
-    return done();
-  }
-
   // Handles the messages that arrive within `wait_ns` (0: only those already there).
-  void receive_for(int64_t wait_ns) {
+  void receive_for(int64_t wait_ns) override {
     pollfd fd{lcm_.getFileno(), POLLIN, 0};
     const timespec timeout{wait_ns / 1'000'000'000, wait_ns % 1'000'000'000};
     if (ppoll(&fd, 1, &timeout, nullptr) > 0) lcm_.handle();
   }
 
-  bool stopped() const { return options_.stop && options_.stop->load(); }
-  const rt::CycleObserver& after_cycle() const { return options_.after_cycle; }
+  bool stopped() const override { return options_.stop && options_.stop->load(); }
+  bool in_session() const override { return server_->in_session(); }
+  bool answered() const override { return server_->answered(); }
+  void repeat_state() override { publish_state(true); }
+  void robot_cycle(rt::CycleDriver& driver) override;
   uint64_t state_messages() const { return state_messages_; }
   // Publication of the state -> its command received, for a state of a control session.
   std::optional<int64_t> round_trip_ns() const {
@@ -157,59 +141,17 @@ status_t status_message(const RobotServer& server, const rt::TimingReport& timin
 // One robot cycle of a serve run: the server steps with the command that answered the state (or
 // none), the new state is published; the status every kStatusEvery cycles, the scenario record
 // every kScenarioEvery.
-void robot_cycle(Bus& bus, rt::CycleDriver& driver) {
-  RobotServer& server = bus.server();
+void Bus::robot_cycle(rt::CycleDriver& driver) {
+  RobotServer& server = *server_;
   const bool lost = server.in_session() && !server.answered();
-  if (const std::optional<int64_t> round_trip = bus.round_trip_ns()) driver.add_round_trip_ns(*round_trip);
+  if (const std::optional<int64_t> round_trip = round_trip_ns()) driver.add_round_trip_ns(*round_trip);
   server.step(now_utime());
   driver.count_cycle(lost);
-  bus.publish_state(false);
+  publish_state(false);
   const uint64_t cycles = driver.cycles();
-  if (cycles % kStatusEvery == 0) bus.publish(bus.channels().status, encode(status_message(server, driver.report())));
-  if (cycles % kScenarioEvery == 0) bus.publish_scenario();
-  if (bus.after_cycle()) bus.after_cycle()(server.emulator().state(), server.last_cycle());
-}
-
-// Real time: at each deadline the robot steps with the command received since the last state
-// (the FCI's rule: in time only if before this deadline) and publishes the new state; a cycle
-// whose step and publication pass the next deadline is caught up (rt::CycleDriver).
-void run_realtime(Bus& bus, rt::CycleDriver& driver, uint64_t cycles, ServeReport& report) {
-  const auto more = [&] { return driver.cycles() < cycles; };
-  bus.publish_state(false);
-  while (more() && !bus.stopped()) {
-    const int64_t cycle_start = monotonic_ns();
-    // Messages until the deadline: blocking until the spin point, then polling without blocking,
-    // so that the deadline is met as closely as by a sleep and a spin.
-    while (!driver.deadline_reached() && !bus.stopped()) bus.receive_for(driver.time_to_spin_ns());
-    const bool session_cycle = bus.server().in_session();
-    robot_cycle(bus, driver);
-    driver.catch_up(driver.end_cycle(), [&] { robot_cycle(bus, driver); }, more);
-    if (session_cycle) report.motion_wall_seconds += static_cast<double>(monotonic_ns() - cycle_start) * 1e-9;
-  }
-}
-
-// Lockstep: idle cycles pass at the wall-clock pace (a controller may start a session); a
-// session's cycle waits for its command up to the timeout.
-void run_lockstep(Bus& bus, rt::CycleDriver& driver, uint64_t cycles, const ServeOptions& options, ServeReport& report) {
-  RobotServer& server = bus.server();
-  const auto timeout_ns = static_cast<int64_t>(options.lockstep_timeout * 1e9);
-  const auto session_running = [&] { return server.in_session(); };
-  int64_t deadline = monotonic_ns();
-  bus.publish_state(false);
-  while (driver.cycles() < cycles && !bus.stopped()) {
-    const int64_t cycle_start = monotonic_ns();
-    deadline += kCycleNs;
-    if (driver.cycles() == 0 && options.wait_for_controller) bus.pump_until(INT64_MAX, true, session_running);
-    else if (!server.in_session()) bus.pump_until(deadline, false, session_running);
-    if (server.in_session()) bus.pump_until(monotonic_ns() + timeout_ns, true, [&] { return server.answered(); });
-    const bool session_cycle = server.in_session();
-    robot_cycle(bus, driver);
-    const int64_t now = monotonic_ns();
-    if (session_cycle) report.motion_wall_seconds += static_cast<double>(now - cycle_start) * 1e-9;
-    // A session's cycles run as fast as the controller answers; idle cycles after it keep the
-    // wall-clock pace from its end rather than from the schedule it ran ahead of.
-    deadline = session_cycle ? now : std::max(deadline, now);
-  }
+  if (cycles % kStatusEvery == 0) publish(channels_.status, encode(status_message(server, driver.report())));
+  if (cycles % kScenarioEvery == 0) publish_scenario();
+  if (options_.after_cycle) options_.after_cycle(server.emulator().state(), server.last_cycle());
 }
 
 }  // namespace
@@ -222,9 +164,12 @@ ServeReport serve(rt::Emulator& robot, const rt::Scenario& scenario, const Serve
   RobotServer& server = bus.server();
   ServeReport report;
   rt::CycleDriver driver(options.clock);
-  const auto cycles = static_cast<uint64_t>(std::llround(options.duration / rt::kDeltaT));
-  if (options.clock == rt::Clock::kRealtime) run_realtime(bus, driver, cycles, report);
-  else run_lockstep(bus, driver, cycles, options, report);
+  rt::BusPacing pacing;
+  pacing.cycles = static_cast<uint64_t>(std::llround(options.duration / rt::kDeltaT));
+  pacing.lockstep_timeout = options.lockstep_timeout;
+  pacing.wait_for_controller = options.wait_for_controller;
+  bus.publish_state(false);
+  report.motion_wall_seconds = rt::run_bus_cycles(bus, driver, pacing);
 
   report.timing = driver.report();
   report.counters = server.counters();

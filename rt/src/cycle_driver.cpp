@@ -4,6 +4,7 @@
 #include <sched.h>
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -65,6 +66,72 @@ TimingReport CycleDriver::report() const {
     report.wakeup_latency_us = clock_->wakeup_latency_us().percentiles();
   }
   return report;
+}
+
+namespace {
+
+constexpr int64_t kRepeatStateNs = 10'000'000;   // lockstep: repeat a waiting state for late joiners
+
+// Handles messages until `done()` or the monotonic time `deadline_ns`, repeating the state every
+// 10 ms if `repeat`. Returns done().
+template <typename Done>
+bool receive_until(MessageBus& bus, int64_t deadline_ns, bool repeat, const Done& done) {
+  int64_t next_repeat = monotonic_ns() + kRepeatStateNs;
+  while (!done() && !bus.stopped()) {
+    const int64_t now = monotonic_ns();
+    if (now >= deadline_ns) return false;
+    if (repeat && now >= next_repeat) {
+      bus.repeat_state();
+      next_repeat = now + kRepeatStateNs;
+    }
+    bus.receive_for(std::min(deadline_ns, repeat ? next_repeat : deadline_ns) - now);
+  }
+  return done();
+}
+
+double run_realtime(MessageBus& bus, CycleDriver& driver, uint64_t cycles) {
+  double session_seconds = 0.0;
+  const auto more = [&] { return driver.cycles() < cycles; };
+  while (more() && !bus.stopped()) {
+    const int64_t cycle_start = monotonic_ns();
+    // Messages until the deadline: blocking until the spin point, then polling without blocking,
+    // so that the deadline is met as closely as by a sleep and a spin.
+    while (!driver.deadline_reached() && !bus.stopped()) bus.receive_for(driver.time_to_spin_ns());
+    const bool session_cycle = bus.in_session();
+    bus.robot_cycle(driver);
+    driver.catch_up(driver.end_cycle(), [&] { bus.robot_cycle(driver); }, more);
+    if (session_cycle) session_seconds += static_cast<double>(monotonic_ns() - cycle_start) * 1e-9;
+  }
+  return session_seconds;
+}
+
+double run_lockstep(MessageBus& bus, CycleDriver& driver, const BusPacing& pacing) {
+  double session_seconds = 0.0;
+  const auto timeout_ns = static_cast<int64_t>(pacing.lockstep_timeout * 1e9);
+  const auto session_running = [&] { return bus.in_session(); };
+  int64_t deadline = monotonic_ns();
+  while (driver.cycles() < pacing.cycles && !bus.stopped()) {
+    const int64_t cycle_start = monotonic_ns();
+    deadline += DeadlineClock::kPeriodNs;
+    if (driver.cycles() == 0 && pacing.wait_for_controller) receive_until(bus, INT64_MAX, true, session_running);
+    else if (!bus.in_session()) receive_until(bus, deadline, false, session_running);
+    if (bus.in_session()) receive_until(bus, monotonic_ns() + timeout_ns, true, [&] { return bus.answered(); });
+    const bool session_cycle = bus.in_session();
+    bus.robot_cycle(driver);
+    const int64_t now = monotonic_ns();
+    if (session_cycle) session_seconds += static_cast<double>(now - cycle_start) * 1e-9;
+    // A session's cycles run as fast as the controller answers; idle cycles after it keep the
+    // wall-clock pace from its end rather than from the schedule it ran ahead of.
+    deadline = session_cycle ? now : std::max(deadline, now);
+  }
+  return session_seconds;
+}
+
+}  // namespace
+
+double run_bus_cycles(MessageBus& bus, CycleDriver& driver, const BusPacing& pacing) {
+  if (driver.clock() == Clock::kRealtime) return run_realtime(bus, driver, pacing.cycles);
+  return run_lockstep(bus, driver, pacing);
 }
 
 }  // namespace csp::rt

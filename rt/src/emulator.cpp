@@ -702,7 +702,16 @@ void Emulator::check_limits_and_collisions() {
 // (the user's torque drove the arm: where the arm is).
 void Emulator::end_motion_if_finished() {
   if (phase_ != Phase::kMove || !reception_.finish_requested) return;
-  torque_loop_.q_hold = controller_ == ControllerMode::kExternalController ? plant_state_.q : motion_generator_.q_c;
+  end_motion(controller_ == ControllerMode::kExternalController ? plant_state_.q : motion_generator_.q_c);
+}
+
+void Emulator::stop_motion() {
+  if (!mode_) throw InvalidOperation("StopMove: no motion is running");
+  end_motion(plant_state_.q);
+}
+
+void Emulator::end_motion(const Vector7& q_hold) {
+  torque_loop_.q_hold = q_hold;
   mode_.reset();
   phase_ = Phase::kIdle;
   state_.robot_mode = RobotMode::kIdle;

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <optional>
 
 #include "csp/dynamics/spatial.hpp"
 
@@ -56,6 +57,17 @@ inline Transform transform_from_matrix(const Eigen::Matrix4d& m) { return {m.top
 
 inline Transform transform_from_array(const std::array<double, 16>& column_major) {
   return transform_from_matrix(from_array<Eigen::Matrix4d>(column_major));
+}
+
+// The pose of a 4x4 homogeneous matrix received from outside (setEE, setK over a bus): nullopt
+// unless it is finite and rigid (rotation orthonormal to 1e-6 with determinant +1, bottom row
+// 0 0 0 1).
+inline std::optional<Transform> rigid_transform_from_matrix(const Eigen::Matrix4d& m) {
+  const Matrix3 rotation = m.topLeftCorner<3, 3>();
+  const bool rigid = m.allFinite() && m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
+                     (rotation.transpose() * rotation).isApprox(Matrix3::Identity(), 1e-6) && rotation.determinant() > 0.0;
+  if (!rigid) return std::nullopt;
+  return transform_from_matrix(m);
 }
 
 }  // namespace csp

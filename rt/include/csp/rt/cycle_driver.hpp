@@ -102,4 +102,36 @@ class CycleDriver {
   int64_t start_ns_;
 };
 
+// A network front end's bus as the cycle driver paces it (csp serve's LCM, csp fci's sockets):
+// messages arrive whenever they do, the robot steps once a cycle.
+class MessageBus {
+ public:
+  virtual ~MessageBus() = default;
+  // Handles the messages that arrive within `wait_ns` (0: only those already there).
+  virtual void receive_for(int64_t wait_ns) = 0;
+  // A control session runs (its cycles want commands) and this cycle's command has arrived.
+  virtual bool in_session() const = 0;
+  virtual bool answered() const = 0;
+  // Steps the robot with the command that answered its state, or none, and sends the new state;
+  // counts the cycle with `driver`.
+  virtual void robot_cycle(CycleDriver& driver) = 0;
+  // Sends the current state again (lockstep: a controller that missed it is not stuck).
+  virtual void repeat_state() = 0;
+  virtual bool stopped() const = 0;
+};
+
+struct BusPacing {
+  uint64_t cycles = UINT64_MAX;       // robot cycles to run (UINT64_MAX: until the bus is stopped)
+  double lockstep_timeout = 1.0;      // lockstep: how long a session's cycle waits for its command [s]
+  bool wait_for_controller = false;   // lockstep: hold the first cycle until a session starts
+};
+
+// Runs `bus`'s cycles on `driver`'s clock (the first state must be sent already). Real time: at
+// each deadline the robot steps with the command received since the last state (the FCI's rule:
+// in time only if before this deadline), and missed deadlines are caught up. Lockstep: idle cycles
+// pass at the wall-clock pace (a controller may start a session); a session's cycle waits for its
+// command up to the timeout, repeating its state every 10 ms. Returns the wall time the session
+// cycles took [s] (lockstep: the controller's pace).
+double run_bus_cycles(MessageBus& bus, CycleDriver& driver, const BusPacing& pacing);
+
 }  // namespace csp::rt

@@ -180,6 +180,10 @@ class Emulator {
   // The same with the command that arrived in time, or null when none did (lost).
   void step(const Command* command) { step(command ? CycleInput::received(*command) : CycleInput::lost()); }
 
+  // The FCI's StopMove: the motion ends now, whatever its commands say; the robot holds where the
+  // arm is, its idle joint impedance bringing it to rest. InvalidOperation without a motion.
+  void stop_motion();
+
   // Configuration between motions (Robot::set...); InvalidOperation during a motion.
   void set_collision_behavior(const CollisionBehavior& behavior);
   void set_joint_impedance(const Vector7& stiffness);
@@ -292,6 +296,7 @@ class Emulator {
   LinkWrenches external_link_wrenches(double t);
   LinkWrenches with_contact_wrenches(const LinkWrenches& scripted) const;
   void enter_reflex(const ErrorSet& errors, const std::string& reason);
+  void end_motion(const Vector7& q_hold);   // Move -> Idle, holding q_hold
 
   void rebuild_internal_model();
   void require_no_motion(const char* operation) const;

@@ -1,0 +1,219 @@
+// The FCI research interface on the wire, as the robot speaks it (docs/fci.md): the TCP messages of
+// the command port (1337) and the UDP state and command packets of the 1 kHz exchange, for the two
+// protocol versions CSP serves: 5 (libfranka 0.9.x, the Panda) and 7 (libfranka 0.10-0.13, the FR3).
+//
+// Written from libfranka's research-interface headers (common/include/research_interface/robot in
+// ../shared/vendor), not copied: CSP's own structs, every field in the robot's order, packed as the
+// robot packs them (little endian, no padding). tests/fci/test_fci_protocol_v*.cpp compile each
+// version's vendored header beside these and check size, offset and code of every field and value.
+//
+// The versions differ in command codes (5 has GetCartesianLimit and SetFilters), in some status
+// codes (7 adds the "safety functions" statuses in the middle of the enums) and in the controller
+// command (7 adds torque_command_finished). Both use the same robot state.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace csp::fci {
+
+using Version = uint16_t;
+inline constexpr Version kPandaVersion = 5;   // libfranka 0.9.x (Panda system >= 4.2.1)
+inline constexpr Version kFr3Version = 7;     // libfranka 0.10 to 0.13 (FR3)
+inline constexpr uint16_t kCommandPort = 1337;
+inline constexpr uint16_t kGripperPort = 1338;
+
+// The commands of the command port, by name; their codes depend on the version (wire_code).
+enum class Command {
+  kConnect,
+  kMove,
+  kStopMove,
+  kGetCartesianLimit,   // version 5 only
+  kSetCollisionBehavior,
+  kSetJointImpedance,
+  kSetCartesianImpedance,
+  kSetGuidingMode,
+  kSetEEToK,
+  kSetNEToEE,
+  kSetLoad,
+  kSetFilters,          // version 5 only
+  kAutomaticErrorRecovery,
+  kLoadModelLibrary,
+};
+const char* command_name(Command command);
+// The command a code stands for in `version`; nullopt for a code the version does not have.
+std::optional<Command> command_from_code(uint32_t code, Version version);
+uint32_t command_code(Command command, Version version);   // throws std::invalid_argument if absent
+
+// Statuses of the responses, by name (the union over the versions); status_code() gives a
+// command's code for one in a version (throws std::invalid_argument if it has none).
+enum class Status {
+  kSuccess,
+  kMotionStarted,
+  kPreempted,
+  kPreemptedDueToActivatedSafetyFunctions,
+  kCommandRejectedDueToActivatedSafetyFunctions,
+  kCommandNotPossibleRejected,
+  kStartAtSingularPoseRejected,
+  kInvalidArgumentRejected,
+  kReflexAborted,
+  kEmergencyAborted,
+  kInputErrorAborted,
+  kAborted,
+  kManualErrorRecoveryRequiredRejected,
+  kIncompatibleLibraryVersion,
+  kError,
+};
+const char* status_name(Status status);
+uint8_t status_code(Command command, Status status, Version version);
+
+#pragma pack(push, 1)
+
+// Every TCP message begins with this; `size` counts the whole message, header included.
+struct MessageHeader {
+  uint32_t command = 0;
+  uint32_t command_id = 0;
+  uint32_t size = 0;
+};
+
+struct ConnectRequest {
+  Version version = 0;
+  uint16_t udp_port = 0;   // where the client receives the robot state
+};
+struct ConnectResponse {
+  uint8_t status = 0;
+  Version version = 0;     // the robot's
+};
+
+// Move: which controller tracks which motion generator (the codes of the Move request).
+enum class MoveControllerMode : uint32_t { kJointImpedance, kCartesianImpedance, kExternalController };
+enum class MoveMotionGeneratorMode : uint32_t { kJointPosition, kJointVelocity, kCartesianPosition, kCartesianVelocity, kNone };
+struct Deviation {
+  double translation = 0.0, rotation = 0.0, elbow = 0.0;
+};
+struct MoveRequest {
+  uint32_t controller_mode = 0;
+  uint32_t motion_generator_mode = 0;
+  Deviation maximum_path_deviation, maximum_goal_pose_deviation;
+};
+
+struct CollisionBehaviorRequest {
+  std::array<double, 7> lower_torque_thresholds_acceleration, upper_torque_thresholds_acceleration;
+  std::array<double, 7> lower_torque_thresholds_nominal, upper_torque_thresholds_nominal;
+  std::array<double, 6> lower_force_thresholds_acceleration, upper_force_thresholds_acceleration;
+  std::array<double, 6> lower_force_thresholds_nominal, upper_force_thresholds_nominal;
+};
+struct JointImpedanceRequest {
+  std::array<double, 7> K_theta;
+};
+struct CartesianImpedanceRequest {
+  std::array<double, 6> K_x;
+};
+struct GuidingModeRequest {
+  std::array<uint8_t, 6> guiding_mode;   // bools
+  uint8_t nullspace;
+};
+struct EEToKRequest {
+  std::array<double, 16> EE_T_K;
+};
+struct NEToEERequest {
+  std::array<double, 16> NE_T_EE;
+};
+struct LoadRequest {
+  double m_load;
+  std::array<double, 3> F_x_Cload;
+  std::array<double, 9> I_load;
+};
+struct FiltersRequest {   // version 5
+  double joint_position_filter_frequency, joint_velocity_filter_frequency;
+  double cartesian_position_filter_frequency, cartesian_velocity_filter_frequency;
+  double controller_filter_frequency;
+};
+struct GetCartesianLimitRequest {   // version 5
+  int32_t id;
+};
+struct GetCartesianLimitResponse {
+  uint8_t status;
+  std::array<double, 3> object_world_size;
+  std::array<double, 16> object_frame;
+  uint8_t object_activation;
+};
+struct LoadModelLibraryRequest {
+  uint8_t architecture;   // 0 x64, 1 x86, 2 ARM, 3 ARM64
+  uint8_t system;         // 0 Linux, 1 Windows
+};
+// Every other response is its status alone; LoadModelLibrary's is followed by the library's bytes.
+struct StatusResponse {
+  uint8_t status = 0;
+};
+
+// The UDP robot state (one a millisecond). motion_generator_mode and controller_mode use the
+// state's own codes, not the Move request's.
+enum class StateMotionGeneratorMode : uint8_t { kIdle, kJointPosition, kJointVelocity, kCartesianPosition, kCartesianVelocity, kNone };
+enum class StateControllerMode : uint8_t { kJointImpedance, kCartesianImpedance, kExternalController, kOther };
+enum class StateRobotMode : uint8_t { kOther, kIdle, kMove, kGuiding, kReflex, kUserStopped, kAutomaticErrorRecovery };
+
+struct RobotStatePacket {
+  uint64_t message_id;
+  std::array<double, 16> O_T_EE, O_T_EE_d, F_T_EE, EE_T_K, F_T_NE, NE_T_EE;
+  double m_ee;
+  std::array<double, 9> I_ee;
+  std::array<double, 3> F_x_Cee;
+  double m_load;
+  std::array<double, 9> I_load;
+  std::array<double, 3> F_x_Cload;
+  std::array<double, 2> elbow, elbow_d;
+  std::array<double, 7> tau_J, tau_J_d, dtau_J, q, q_d, dq, dq_d, ddq_d, joint_contact;
+  std::array<double, 6> cartesian_contact;
+  std::array<double, 7> joint_collision;
+  std::array<double, 6> cartesian_collision;
+  std::array<double, 7> tau_ext_hat_filtered;
+  std::array<double, 6> O_F_ext_hat_K, K_F_ext_hat_K, O_dP_EE_d;
+  std::array<double, 3> O_ddP_O;
+  std::array<double, 2> elbow_c, delbow_c, ddelbow_c;
+  std::array<double, 16> O_T_EE_c;
+  std::array<double, 6> O_dP_EE_c, O_ddP_EE_c;
+  std::array<double, 7> theta, dtheta;
+  uint8_t motion_generator_mode;   // StateMotionGeneratorMode
+  uint8_t controller_mode;         // StateControllerMode
+  std::array<uint8_t, 41> errors;          // bools, in franka::Errors' order
+  std::array<uint8_t, 41> reflex_reason;   // the last motion's errors
+  uint8_t robot_mode;              // StateRobotMode
+  double control_command_success_rate;
+};
+
+// The UDP command answering a state (its message_id).
+struct MotionGeneratorCommandPacket {
+  std::array<double, 7> q_c, dq_c;
+  std::array<double, 16> O_T_EE_c;
+  std::array<double, 6> O_dP_EE_c;
+  std::array<double, 2> elbow_c;
+  uint8_t valid_elbow;
+  uint8_t motion_generation_finished;
+};
+struct RobotCommandPacketV5 {
+  uint64_t message_id;
+  MotionGeneratorCommandPacket motion;
+  std::array<double, 7> tau_J_d;
+};
+struct RobotCommandPacketV7 {
+  uint64_t message_id;
+  MotionGeneratorCommandPacket motion;
+  std::array<double, 7> tau_J_d;
+  uint8_t torque_command_finished;
+};
+
+#pragma pack(pop)
+
+// The size of a command packet in `version`.
+std::size_t robot_command_size(Version version);
+// A command packet of either version with the fields both have (torque_command_finished: false
+// in version 5). Returns nullopt if `size` is not the version's packet size.
+std::optional<RobotCommandPacketV7> decode_robot_command(const void* data, std::size_t size, Version version);
+
+// The size of a request message (header included) of `command` in `version`.
+std::size_t request_size(Command command, Version version);
+
+}  // namespace csp::fci

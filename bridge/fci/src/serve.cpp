@@ -1,0 +1,247 @@
+#include "csp/fci/serve.hpp"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <utility>
+
+#include "csp/rt/scenario.hpp"
+
+namespace csp::fci {
+namespace {
+
+using rt::monotonic_ns;
+
+// A socket file descriptor, closed with its owner.
+class Socket {
+ public:
+  Socket() = default;
+  explicit Socket(int fd) : fd_(fd) {}
+  Socket(Socket&& other) noexcept : fd_(other.release()) {}
+  Socket& operator=(Socket&& other) noexcept {
+    reset(other.release());
+    return *this;
+  }
+  ~Socket() { reset(); }
+  int fd() const { return fd_; }
+  bool open() const { return fd_ >= 0; }
+  void reset(int fd = -1) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = fd;
+  }
+  int release() { return std::exchange(fd_, -1); }
+
+ private:
+  int fd_ = -1;
+};
+
+std::string endpoint(const sockaddr_in& a) {
+  char text[INET_ADDRSTRLEN] = "?";
+  inet_ntop(AF_INET, &a.sin_addr, text, sizeof(text));
+  return std::string(text) + ":" + std::to_string(ntohs(a.sin_port));
+}
+
+[[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what + ": " + std::strerror(errno)); }
+
+// The robot's network side: the command port's listener and its one client, and the UDP socket
+// of the 1 kHz exchange. The FciServer judges every byte; this class only moves them.
+class Network : public rt::MessageBus {
+ public:
+  Network(rt::Emulator& robot, const FciServeOptions& options)
+      : options_(options),
+        server_(robot, options.version, options.model_library, [this](const std::string& line) { diagnose(line); }) {
+    address_.sin_family = AF_INET;
+    if (inet_pton(AF_INET, options.address.c_str(), &address_.sin_addr) != 1)
+      throw std::runtime_error("--address " + options.address + ": not an IPv4 address");
+    udp_ = Socket(::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+    if (!udp_.open()) fail("UDP socket");
+    sockaddr_in udp_address = address_;
+    udp_address.sin_port = 0;   // libfranka answers to wherever the state came from
+    if (::bind(udp_.fd(), reinterpret_cast<const sockaddr*>(&udp_address), sizeof(udp_address)) != 0)
+      fail("cannot bind the UDP socket to " + options.address);
+    listen_for_a_client();
+  }
+
+  FciServer& server() { return server_; }
+  uint64_t foreign_packets() const { return foreign_packets_; }
+
+  // MessageBus
+  void receive_for(int64_t wait_ns) override;
+  bool in_session() const override { return server_.in_motion(); }
+  bool answered() const override { return server_.answered(); }
+  void robot_cycle(rt::CycleDriver& driver) override;
+  void repeat_state() override { send_state(); }
+  bool stopped() const override { return options_.stop && options_.stop->load(); }
+
+  void send_state() {
+    const std::optional<uint16_t> port = server_.client_udp_port();
+    if (!port || !client_.open()) return;
+    const RobotStatePacket packet = server_.state_packet();
+    sockaddr_in to = client_address_;
+    to.sin_port = htons(*port);
+    if (server_.in_motion() && !state_sent_ns_) state_sent_ns_ = monotonic_ns();
+    // A full socket buffer loses this state, as a full network would; the next one follows in 1 ms.
+    ::sendto(udp_.fd(), &packet, sizeof(packet), MSG_DONTWAIT, reinterpret_cast<const sockaddr*>(&to), sizeof(to));
+  }
+
+ private:
+  // While a client is connected the robot does not listen: a second client's connection is
+  // refused (libfranka: "Connection to FCI refused") instead of left waiting for an answer.
+  void listen_for_a_client() {
+    listener_ = Socket(::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
+    if (!listener_.open()) fail("TCP socket");
+    const int yes = 1;
+    ::setsockopt(listener_.fd(), SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+    sockaddr_in command_port = address_;
+    command_port.sin_port = htons(kCommandPort);
+    if (::bind(listener_.fd(), reinterpret_cast<const sockaddr*>(&command_port), sizeof(command_port)) != 0)
+      fail("cannot listen on " + endpoint(command_port));
+    if (::listen(listener_.fd(), 1) != 0) fail("cannot listen on " + endpoint(command_port));
+  }
+
+  void accept_client() {
+    sockaddr_in from{};
+    socklen_t length = sizeof(from);
+    Socket client(::accept4(listener_.fd(), reinterpret_cast<sockaddr*>(&from), &length, SOCK_NONBLOCK | SOCK_CLOEXEC));
+    if (!client.open()) return;   // gone before it was accepted
+    const int yes = 1;
+    ::setsockopt(client.fd(), IPPROTO_TCP, TCP_NODELAY, &yes, sizeof(yes));
+    client_ = std::move(client);
+    client_address_ = from;
+    listener_.reset();
+    drop_client_ = false;
+    diagnose("client connected from " + endpoint(from));
+    server_.open_connection([this](const std::vector<uint8_t>& bytes) { send_tcp(bytes); });
+  }
+
+  void drop_client(const std::string& why) {
+    diagnose("client " + endpoint(client_address_) + " " + why);
+    server_.close_connection();
+    client_.reset();
+    listen_for_a_client();
+  }
+
+  // Blocking until sent or 2 s passed (a client that takes no bytes is dropped): replies are small
+  // but for the model library.
+  void send_tcp(const std::vector<uint8_t>& bytes) {
+    std::size_t sent = 0;
+    const int64_t give_up = monotonic_ns() + 2'000'000'000;
+    while (sent < bytes.size() && !drop_client_) {
+      const ssize_t n = ::send(client_.fd(), bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL | MSG_DONTWAIT);
+      if (n > 0) {
+        sent += static_cast<std::size_t>(n);
+      } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK) && monotonic_ns() < give_up) {
+        pollfd fd{client_.fd(), POLLOUT, 0};
+        ::poll(&fd, 1, 10);
+      } else {
+        drop_client_ = true;
+      }
+    }
+  }
+
+  void receive_tcp() {
+    uint8_t buffer[4096];
+    const ssize_t n = ::recv(client_.fd(), buffer, sizeof(buffer), MSG_DONTWAIT);
+    if (n == 0) return drop_client("disconnected");
+    if (n < 0) {
+      if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return;
+      return drop_client(std::string("lost: ") + std::strerror(errno));
+    }
+    if (!server_.receive_tcp(buffer, static_cast<std::size_t>(n))) drop_client_ = true;
+    if (drop_client_) drop_client("disconnected by the robot");
+  }
+
+  void receive_udp() {
+    // A packet larger than any command is read whole, so that its size is judged, not truncated.
+    uint8_t buffer[2048];
+    for (;;) {
+      sockaddr_in from{};
+      socklen_t length = sizeof(from);
+      const ssize_t n = ::recvfrom(udp_.fd(), buffer, sizeof(buffer), MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&from), &length);
+      if (n < 0) return;
+      const std::optional<uint16_t> port = server_.client_udp_port();
+      if (!client_.open() || !port || from.sin_addr.s_addr != client_address_.sin_addr.s_addr || ntohs(from.sin_port) != *port) {
+        ++foreign_packets_;
+        continue;
+      }
+      server_.receive_udp(buffer, static_cast<std::size_t>(n));
+      if (server_.answered() && state_sent_ns_ && !answered_ns_) answered_ns_ = monotonic_ns();
+    }
+  }
+
+  void diagnose(const std::string& line) const {
+    if (options_.diagnostic) options_.diagnostic(line);
+  }
+
+  const FciServeOptions& options_;
+  FciServer server_;
+  sockaddr_in address_{};
+  Socket listener_, client_, udp_;
+  sockaddr_in client_address_{};
+  bool drop_client_ = false;
+  uint64_t foreign_packets_ = 0;
+  std::optional<int64_t> state_sent_ns_, answered_ns_;   // the round trip of a motion's cycle
+};
+
+void Network::receive_for(int64_t wait_ns) {
+  pollfd fds[2] = {{client_.open() ? client_.fd() : listener_.fd(), POLLIN, 0}, {udp_.fd(), POLLIN, 0}};
+  const timespec timeout{wait_ns / 1'000'000'000, wait_ns % 1'000'000'000};
+  if (::ppoll(fds, 2, &timeout, nullptr) <= 0) return;
+  if (fds[1].revents & POLLIN) receive_udp();
+  if (fds[0].revents & (POLLIN | POLLHUP | POLLERR)) {
+    if (client_.open()) receive_tcp();
+    else accept_client();
+  }
+}
+
+// One robot cycle: the server steps with the command that answered the state (or none), the new
+// state goes to the client.
+void Network::robot_cycle(rt::CycleDriver& driver) {
+  const bool lost = server_.in_motion() && !server_.answered();
+  if (state_sent_ns_ && answered_ns_) driver.add_round_trip_ns(*answered_ns_ - *state_sent_ns_);
+  state_sent_ns_.reset();
+  answered_ns_.reset();
+  server_.step();
+  driver.count_cycle(lost);
+  send_state();
+  if (options_.after_cycle) options_.after_cycle(server_.emulator().state(), server_.last_cycle());
+}
+
+}  // namespace
+
+FciServeReport serve_fci(rt::Emulator& robot, const FciServeOptions& options) {
+  rt::BusPacing pacing;
+  if (options.duration) {
+    if (!(*options.duration > 0.0) || *options.duration > rt::kMaxDuration)
+      throw std::invalid_argument("duration: expected a positive number of seconds");
+    pacing.cycles = static_cast<uint64_t>(std::llround(*options.duration / rt::kDeltaT));
+  }
+  if (!(options.lockstep_timeout > 0.0 && options.lockstep_timeout <= 3600.0))
+    throw std::invalid_argument("lockstep timeout: expected a positive number of seconds, at most 3600");
+  pacing.lockstep_timeout = options.lockstep_timeout;
+  Network network(robot, options);
+  rt::CycleDriver driver(options.clock);
+  if (options.listening) options.listening();
+  network.send_state();
+  rt::run_bus_cycles(network, driver, pacing);
+
+  FciServeReport report;
+  report.timing = driver.report();
+  report.counters = network.server().counters();
+  report.emulator = robot.counters();
+  report.foreign_packets = network.foreign_packets();
+  report.last_reflex = robot.reflex_reason();
+  return report;
+}
+
+}  // namespace csp::fci

@@ -1,0 +1,16 @@
+// CSP's FCI version 5 wire format against libfranka 0.9.2's research-interface headers (fci_protocol_checks.hpp).
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <type_traits>
+
+// libfranka 0.9.2's headers in a namespace of their own: the other version's test declares the same names.
+namespace vendor_v5 {
+#include <research_interface/robot/rbk_types.h>
+#include <research_interface/robot/service_types.h>
+}  // namespace vendor_v5
+
+#define CSP_FCI_VERSION 5
+#define CSP_FCI_VENDOR vendor_v5
+#define CSP_FCI_SUITE FciProtocolV5
+#include "fci_protocol_checks.hpp"
