@@ -291,6 +291,44 @@ TEST(CSP_FCI_SUITE, TheRobotCommandHasLibfrankasLayout) {
   EXPECT_FALSE(fci::decode_robot_command(&sent, sizeof(sent) - 1, kVersion));
 }
 
+// The hand's server (port 1338): version 3 in both libfranka versions.
+TEST(CSP_FCI_SUITE, TheGripperMessagesAreLibfrankas) {
+  namespace gripper = CSP_FCI_VENDOR::research_interface::gripper;
+  EXPECT_EQ(fci::kGripperVersion, gripper::kVersion);
+  EXPECT_EQ(sizeof(fci::GripperMessageHeader), sizeof(gripper::CommandHeader));
+  CSP_EXPECT_FIELD(fci::GripperMessageHeader, gripper::CommandHeader, command);
+  CSP_EXPECT_FIELD(fci::GripperMessageHeader, gripper::CommandHeader, command_id);
+  CSP_EXPECT_FIELD(fci::GripperMessageHeader, gripper::CommandHeader, size);
+  EXPECT_EQ(sizeof(fci::GripperConnectRequest), sizeof(gripper::Connect::Request));
+  EXPECT_EQ(sizeof(fci::GripperConnectResponse), sizeof(gripper::Connect::Response));
+  EXPECT_EQ(sizeof(fci::GripperStatusResponse), sizeof(gripper::Grasp::Response));
+  EXPECT_EQ(sizeof(fci::GripperStatePacket), sizeof(gripper::GripperState));
+  CSP_EXPECT_FIELD(fci::GripperStatePacket, gripper::GripperState, message_id);
+  CSP_EXPECT_FIELD(fci::GripperStatePacket, gripper::GripperState, width);
+  CSP_EXPECT_FIELD(fci::GripperStatePacket, gripper::GripperState, max_width);
+  CSP_EXPECT_FIELD(fci::GripperStatePacket, gripper::GripperState, is_grasped);
+  CSP_EXPECT_FIELD(fci::GripperStatePacket, gripper::GripperState, temperature);
+  // A grasp as libfranka sends it (its epsilon is a struct of two doubles), read by CSP.
+  using GraspMessage = gripper::Grasp::Message<gripper::Grasp::Request>;
+  const GraspMessage sent(gripper::Grasp::Header(gripper::Command::kGrasp, 9, sizeof(GraspMessage)),
+                          gripper::Grasp::Request(0.03, gripper::Grasp::GraspEpsilon(0.004, 0.005), 0.1, 40.0));
+  EXPECT_EQ(fci::gripper_request_size(static_cast<uint16_t>(gripper::Command::kGrasp)), sizeof(GraspMessage));
+  fci::GraspRequest grasp;
+  std::memcpy(&grasp, reinterpret_cast<const uint8_t*>(&sent) + sizeof(fci::GripperMessageHeader), sizeof(grasp));
+  EXPECT_EQ(grasp.width, 0.03);
+  EXPECT_EQ(grasp.epsilon_inner, 0.004);
+  EXPECT_EQ(grasp.epsilon_outer, 0.005);
+  EXPECT_EQ(grasp.speed, 0.1);
+  EXPECT_EQ(grasp.force, 40.0);
+  using MoveMessage = gripper::Move::Message<gripper::Move::Request>;
+  EXPECT_EQ(fci::gripper_request_size(static_cast<uint16_t>(gripper::Command::kMove)), sizeof(MoveMessage));
+  EXPECT_EQ(fci::gripper_request_size(static_cast<uint16_t>(gripper::Command::kHoming)), sizeof(gripper::Homing::Message<gripper::Homing::Request>));
+  EXPECT_EQ(fci::gripper_request_size(static_cast<uint16_t>(gripper::Command::kConnect)), sizeof(gripper::Connect::Message<gripper::Connect::Request>));
+  EXPECT_EQ(static_cast<uint16_t>(fci::GripperStatus::kAborted), static_cast<uint16_t>(gripper::Grasp::Status::kAborted));
+  EXPECT_EQ(static_cast<uint16_t>(fci::GripperStatus::kUnsuccessful), static_cast<uint16_t>(gripper::Grasp::Status::kUnsuccessful));
+  EXPECT_EQ(static_cast<uint16_t>(fci::GripperCommand::kStop), static_cast<uint16_t>(gripper::Command::kStop));
+}
+
 #undef CSP_EXPECT_FIELD
 
 }  // namespace

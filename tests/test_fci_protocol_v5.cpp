@@ -8,6 +8,7 @@
 namespace vendor_v5 {
 #include <research_interface/robot/rbk_types.h>
 #include <research_interface/robot/service_types.h>
+#include <research_interface/gripper/types.h>
 }  // namespace vendor_v5
 
 #define CSP_FCI_VERSION 5

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "csp/fci/gripper_server.hpp"
 #include "csp/fci/server.hpp"
 #include "csp/rt/scenario.hpp"
 
@@ -395,6 +396,135 @@ TEST(FciServer, TheStatePacketIsTheRobotsState) {
   EXPECT_EQ(p.I_ee, s.I_ee);
   EXPECT_EQ(p.theta, s.theta);
   EXPECT_EQ(p.control_command_success_rate, s.control_command_success_rate);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The hand's server (port 1338)
+
+namespace {
+
+class HandClient {
+ public:
+  HandClient()
+      : scenario_(rt::load_scenario(rt::shipped_scenario_path("libfranka_fr3"))),
+        robot_(scenario_.emulator),
+        server_(robot_, scenario_.hand, [this](const std::string& line) { lines.push_back(line); }) {
+    server_.open_connection([this](const std::vector<uint8_t>& bytes) { replies.push_back(bytes); });
+  }
+
+  template <typename Payload>
+  bool send(fci::GripperCommand command, const Payload* payload, std::size_t payload_size) {
+    fci::GripperMessageHeader header;
+    header.command = static_cast<uint16_t>(command);
+    header.command_id = next_id_++;
+    header.size = static_cast<uint32_t>(sizeof(header) + payload_size);
+    std::vector<uint8_t> bytes(header.size);
+    std::memcpy(bytes.data(), &header, sizeof(header));
+    if (payload_size > 0) std::memcpy(bytes.data() + sizeof(header), payload, payload_size);
+    return server_.receive_tcp(bytes.data(), bytes.size());
+  }
+  bool connect(uint16_t version) {
+    const fci::GripperConnectRequest request{version, 50000};
+    return send(fci::GripperCommand::kConnect, &request, sizeof(request));
+  }
+  uint16_t status(std::size_t k) const {
+    uint16_t s = 0;
+    std::memcpy(&s, replies.at(k).data() + sizeof(fci::GripperMessageHeader), sizeof(s));
+    return s;
+  }
+  uint32_t command_id(std::size_t k) const {
+    fci::GripperMessageHeader h;
+    std::memcpy(&h, replies.at(k).data(), sizeof(h));
+    return h.command_id;
+  }
+  // Robot cycles until a reply arrives (at most `seconds`); the state messages seen meanwhile.
+  std::vector<fci::GripperStatePacket> run_until_reply(double seconds) {
+    std::vector<fci::GripperStatePacket> states;
+    const std::size_t before = replies.size();
+    for (int k = 0; k < static_cast<int>(seconds * 1000) && replies.size() == before; ++k) {
+      robot_.step(nullptr);
+      if (const auto state = server_.step()) states.push_back(*state);
+    }
+    return states;
+  }
+
+  fci::GripperServer& server() { return server_; }
+  std::vector<std::vector<uint8_t>> replies;
+  std::vector<std::string> lines;
+
+ private:
+  rt::Scenario scenario_;
+  rt::Emulator robot_;
+  fci::GripperServer server_;
+  uint32_t next_id_ = 0;
+};
+
+TEST(FciGripperServer, ConnectsAtVersion3AndRefusesAnother) {
+  HandClient client;
+  EXPECT_TRUE(client.connect(fci::kGripperVersion));
+  EXPECT_EQ(client.status(0), 0);
+  EXPECT_EQ(client.server().client_udp_port(), 50000);
+  HandClient old;
+  EXPECT_FALSE(old.connect(2));
+  EXPECT_EQ(old.status(0), 1);   // kIncompatibleLibraryVersion
+  EXPECT_EQ(old.server().counters().refused_versions, 1u);
+}
+
+TEST(FciGripperServer, ACommandIsAnsweredWhenTheFingersArrive) {
+  HandClient client;   // libfranka_fr3: a 30 mm object stands between the fingers
+  ASSERT_TRUE(client.connect(fci::kGripperVersion));
+  const fci::GripperMoveRequest move{0.04, 0.1};   // from 80 mm to 40 mm at 0.1 m/s: 0.4 s + the reaction time
+  ASSERT_TRUE(client.send(fci::GripperCommand::kMove, &move, sizeof(move)));
+  EXPECT_EQ(client.replies.size(), 1u) << "answered when it ends, not before";
+  const std::vector<fci::GripperStatePacket> states = client.run_until_reply(2.0);
+  ASSERT_EQ(client.replies.size(), 2u);
+  EXPECT_EQ(client.status(1), static_cast<uint16_t>(fci::GripperStatus::kSuccess));
+  EXPECT_EQ(client.command_id(1), 1u);
+  ASSERT_GE(states.size(), 4u) << "a state message about every 100 ms";
+  EXPECT_LT(states.back().width, states.front().width);
+  EXPECT_NEAR(client.server().hand().state().width, 0.04, 1e-9);
+  // A move through the object stops at it: unsuccessful, as libfranka's move() returning false.
+  const fci::GripperMoveRequest through{0.02, 0.1};
+  ASSERT_TRUE(client.send(fci::GripperCommand::kMove, &through, sizeof(through)));
+  client.run_until_reply(2.0);
+  ASSERT_EQ(client.replies.size(), 3u);
+  EXPECT_EQ(client.status(2), static_cast<uint16_t>(fci::GripperStatus::kUnsuccessful));
+  EXPECT_NEAR(client.server().hand().state().width, 0.03, 1e-9);
+}
+
+TEST(FciGripperServer, ACommandTheHandRefusesFailsAtOnceAndTheConnectionStays) {
+  HandClient client;
+  ASSERT_TRUE(client.connect(fci::kGripperVersion));
+  const fci::GripperMoveRequest too_wide{0.5, 0.1};
+  EXPECT_TRUE(client.send(fci::GripperCommand::kMove, &too_wide, sizeof(too_wide)));
+  ASSERT_EQ(client.replies.size(), 2u);
+  EXPECT_EQ(client.status(1), static_cast<uint16_t>(fci::GripperStatus::kFail));
+  const fci::GraspRequest nan{std::nan(""), 0.005, 0.005, 0.1, 20.0};
+  EXPECT_TRUE(client.send(fci::GripperCommand::kGrasp, &nan, sizeof(nan)));
+  EXPECT_EQ(client.status(2), static_cast<uint16_t>(fci::GripperStatus::kFail));
+  EXPECT_EQ(client.server().counters().failed_commands, 2u);
+  // A malformed message closes the connection with a reason.
+  fci::GripperMessageHeader bad{static_cast<uint16_t>(fci::GripperCommand::kGrasp), 5, 12};
+  EXPECT_FALSE(client.server().receive_tcp(reinterpret_cast<const uint8_t*>(&bad), sizeof(bad)));
+  EXPECT_NE(client.lines.back().find("Grasp of 12 bytes (expected 50)"), std::string::npos) << client.lines.back();
+}
+
+TEST(FciGripperServer, StopAbortsTheRunningCommand) {
+  HandClient client;
+  ASSERT_TRUE(client.connect(fci::kGripperVersion));
+  const fci::GripperMoveRequest move{0.0, 0.01};
+  ASSERT_TRUE(client.send(fci::GripperCommand::kMove, &move, sizeof(move)));
+  client.run_until_reply(0.3);
+  ASSERT_TRUE(client.send<uint8_t>(fci::GripperCommand::kStop, nullptr, 0));
+  client.run_until_reply(1.0);
+  client.run_until_reply(1.0);
+  ASSERT_EQ(client.replies.size(), 3u);
+  EXPECT_EQ(client.command_id(1), 1u);
+  EXPECT_EQ(client.status(1), static_cast<uint16_t>(fci::GripperStatus::kAborted));
+  EXPECT_EQ(client.command_id(2), 2u);
+  EXPECT_EQ(client.status(2), static_cast<uint16_t>(fci::GripperStatus::kSuccess));
 }
 
 }  // namespace

@@ -160,4 +160,27 @@ std::size_t request_size(Command command, Version version) {
   return 0;
 }
 
+const char* gripper_command_name(GripperCommand command) {
+  switch (command) {
+    case GripperCommand::kConnect: return "Connect";
+    case GripperCommand::kHoming: return "Homing";
+    case GripperCommand::kGrasp: return "Grasp";
+    case GripperCommand::kMove: return "Move";
+    case GripperCommand::kStop: return "Stop";
+  }
+  return "?";
+}
+
+std::size_t gripper_request_size(uint16_t command) {
+  const auto with = [](std::size_t payload) { return sizeof(GripperMessageHeader) + payload; };
+  switch (static_cast<GripperCommand>(command)) {
+    case GripperCommand::kConnect: return with(sizeof(GripperConnectRequest));
+    case GripperCommand::kHoming: return with(0);
+    case GripperCommand::kGrasp: return with(sizeof(GraspRequest));
+    case GripperCommand::kMove: return with(sizeof(GripperMoveRequest));
+    case GripperCommand::kStop: return with(0);
+  }
+  return 0;
+}
+
 }  // namespace csp::fci

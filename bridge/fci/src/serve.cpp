@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <utility>
 
@@ -53,60 +54,69 @@ std::string endpoint(const sockaddr_in& a) {
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what + ": " + std::strerror(errno)); }
 
-// The robot's network side: the command port's listener and its one client, and the UDP socket
-// of the 1 kHz exchange. The FciServer judges every byte; this class only moves them.
-class Network : public rt::MessageBus {
+// One TCP port of the robot and its one client, with the UDP socket of its state messages (and,
+// on the command port, of the commands). The server behind it judges every byte; this class only
+// moves them. While a client is connected the port does not listen: a second client's connection
+// is refused (libfranka: "Connection to FCI refused") instead of left waiting for an answer.
+class Port {
  public:
-  Network(rt::Emulator& robot, const FciServeOptions& options)
-      : options_(options),
-        server_(robot, options.version, options.model_library, [this](const std::string& line) { diagnose(line); }) {
-    address_.sin_family = AF_INET;
-    if (inet_pton(AF_INET, options.address.c_str(), &address_.sin_addr) != 1)
-      throw std::runtime_error("--address " + options.address + ": not an IPv4 address");
+  using Diagnostic = std::function<void(const std::string&)>;
+
+  Port(const sockaddr_in& address, uint16_t port, PortServer& server, std::string name, Diagnostic diagnostic)
+      : address_(address), server_(server), name_(std::move(name)), diagnostic_(std::move(diagnostic)) {
+    address_.sin_port = htons(port);
     udp_ = Socket(::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
     if (!udp_.open()) fail("UDP socket");
-    sockaddr_in udp_address = address_;
+    sockaddr_in udp_address = address;
     udp_address.sin_port = 0;   // libfranka answers to wherever the state came from
     if (::bind(udp_.fd(), reinterpret_cast<const sockaddr*>(&udp_address), sizeof(udp_address)) != 0)
-      fail("cannot bind the UDP socket to " + options.address);
-    listen_for_a_client();
+      fail("cannot bind a UDP socket to " + endpoint(udp_address));
+    listen();
   }
 
-  FciServer& server() { return server_; }
-  uint64_t foreign_packets() const { return foreign_packets_; }
+  // The socket to wait on for the TCP side: the client's, or the listener's.
+  int tcp_fd() const { return client_.open() ? client_.fd() : listener_.fd(); }
+  int udp_fd() const { return udp_.fd(); }
 
-  // MessageBus
-  void receive_for(int64_t wait_ns) override;
-  bool in_session() const override { return server_.in_motion(); }
-  bool answered() const override { return server_.answered(); }
-  void robot_cycle(rt::CycleDriver& driver) override;
-  void repeat_state() override { send_state(); }
-  bool stopped() const override { return options_.stop && options_.stop->load(); }
+  // The TCP side is readable: a new client, or bytes (or the end) of the connected one.
+  void on_tcp_readable() {
+    if (!client_.open()) return accept_client();
+    uint8_t buffer[4096];
+    const ssize_t n = ::recv(client_.fd(), buffer, sizeof(buffer), MSG_DONTWAIT);
+    if (n == 0) return drop_client("disconnected");
+    if (n < 0) {
+      if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return;
+      return drop_client(std::string("lost: ") + std::strerror(errno));
+    }
+    if (!server_.receive_tcp(buffer, static_cast<std::size_t>(n))) drop_ = true;
+    if (drop_) drop_client("disconnected by the robot");
+  }
 
-  void send_state() {
+  // Whether a UDP packet came from the connected client's port.
+  bool from_client(const sockaddr_in& from) const {
+    const std::optional<uint16_t> port = server_.client_udp_port();
+    return client_.open() && port && from.sin_addr.s_addr == client_address_.sin_addr.s_addr && ntohs(from.sin_port) == *port;
+  }
+
+  // Sends a state message to the client (once it has connected). A full socket buffer loses it, as
+  // a full network would; the next one follows.
+  void send_udp(const void* data, std::size_t size) const {
     const std::optional<uint16_t> port = server_.client_udp_port();
     if (!port || !client_.open()) return;
-    const RobotStatePacket packet = server_.state_packet();
     sockaddr_in to = client_address_;
     to.sin_port = htons(*port);
-    if (server_.in_motion() && !state_sent_ns_) state_sent_ns_ = monotonic_ns();
-    // A full socket buffer loses this state, as a full network would; the next one follows in 1 ms.
-    ::sendto(udp_.fd(), &packet, sizeof(packet), MSG_DONTWAIT, reinterpret_cast<const sockaddr*>(&to), sizeof(to));
+    ::sendto(udp_.fd(), data, size, MSG_DONTWAIT, reinterpret_cast<const sockaddr*>(&to), sizeof(to));
   }
 
  private:
-  // While a client is connected the robot does not listen: a second client's connection is
-  // refused (libfranka: "Connection to FCI refused") instead of left waiting for an answer.
-  void listen_for_a_client() {
+  void listen() {
     listener_ = Socket(::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
     if (!listener_.open()) fail("TCP socket");
     const int yes = 1;
     ::setsockopt(listener_.fd(), SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
-    sockaddr_in command_port = address_;
-    command_port.sin_port = htons(kCommandPort);
-    if (::bind(listener_.fd(), reinterpret_cast<const sockaddr*>(&command_port), sizeof(command_port)) != 0)
-      fail("cannot listen on " + endpoint(command_port));
-    if (::listen(listener_.fd(), 1) != 0) fail("cannot listen on " + endpoint(command_port));
+    if (::bind(listener_.fd(), reinterpret_cast<const sockaddr*>(&address_), sizeof(address_)) != 0)
+      fail("cannot listen on " + endpoint(address_));
+    if (::listen(listener_.fd(), 1) != 0) fail("cannot listen on " + endpoint(address_));
   }
 
   void accept_client() {
@@ -119,16 +129,16 @@ class Network : public rt::MessageBus {
     client_ = std::move(client);
     client_address_ = from;
     listener_.reset();
-    drop_client_ = false;
-    diagnose("client connected from " + endpoint(from));
+    drop_ = false;
+    diagnostic_(name_ + "client connected from " + endpoint(from));
     server_.open_connection([this](const std::vector<uint8_t>& bytes) { send_tcp(bytes); });
   }
 
   void drop_client(const std::string& why) {
-    diagnose("client " + endpoint(client_address_) + " " + why);
+    diagnostic_(name_ + "client " + endpoint(client_address_) + " " + why);
     server_.close_connection();
     client_.reset();
-    listen_for_a_client();
+    listen();
   }
 
   // Blocking until sent or 2 s passed (a client that takes no bytes is dropped): replies are small
@@ -136,7 +146,7 @@ class Network : public rt::MessageBus {
   void send_tcp(const std::vector<uint8_t>& bytes) {
     std::size_t sent = 0;
     const int64_t give_up = monotonic_ns() + 2'000'000'000;
-    while (sent < bytes.size() && !drop_client_) {
+    while (sent < bytes.size() && !drop_) {
       const ssize_t n = ::send(client_.fd(), bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL | MSG_DONTWAIT);
       if (n > 0) {
         sent += static_cast<std::size_t>(n);
@@ -144,33 +154,69 @@ class Network : public rt::MessageBus {
         pollfd fd{client_.fd(), POLLOUT, 0};
         ::poll(&fd, 1, 10);
       } else {
-        drop_client_ = true;
+        drop_ = true;
       }
     }
   }
 
-  void receive_tcp() {
-    uint8_t buffer[4096];
-    const ssize_t n = ::recv(client_.fd(), buffer, sizeof(buffer), MSG_DONTWAIT);
-    if (n == 0) return drop_client("disconnected");
-    if (n < 0) {
-      if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return;
-      return drop_client(std::string("lost: ") + std::strerror(errno));
+  sockaddr_in address_;
+  PortServer& server_;
+  std::string name_;   // prefix of its diagnostics ("" for the robot, "gripper: ")
+  Diagnostic diagnostic_;
+  Socket listener_, client_, udp_;
+  sockaddr_in client_address_{};
+  bool drop_ = false;
+};
+
+sockaddr_in ipv4_address(const std::string& address) {
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  if (inet_pton(AF_INET, address.c_str(), &a.sin_addr) != 1) throw std::runtime_error("--address " + address + ": not an IPv4 address");
+  return a;
+}
+
+// The robot on the network: its command port with the 1 kHz exchange, and the hand's port.
+class Network : public rt::MessageBus {
+ public:
+  Network(rt::Emulator& robot, const FciServeOptions& options)
+      : options_(options),
+        server_(robot, options.version, options.model_library, [this](const std::string& line) { diagnose(line); }),
+        robot_port_(ipv4_address(options.address), kCommandPort, server_, "", [this](const std::string& line) { diagnose(line); }) {
+    if (options.hand) {
+      gripper_.emplace(robot, *options.hand, [this](const std::string& line) { diagnose(line); });
+      gripper_port_.emplace(ipv4_address(options.address), kGripperPort, *gripper_, "gripper: ",
+                            [this](const std::string& line) { diagnose(line); });
     }
-    if (!server_.receive_tcp(buffer, static_cast<std::size_t>(n))) drop_client_ = true;
-    if (drop_client_) drop_client("disconnected by the robot");
   }
 
-  void receive_udp() {
+  FciServer& server() { return server_; }
+  const GripperServer* gripper() const { return gripper_ ? &*gripper_ : nullptr; }
+  uint64_t foreign_packets() const { return foreign_packets_; }
+
+  // MessageBus
+  void receive_for(int64_t wait_ns) override;
+  bool in_session() const override { return server_.in_motion(); }
+  bool answered() const override { return server_.answered(); }
+  void robot_cycle(rt::CycleDriver& driver) override;
+  void repeat_state() override { send_state(); }
+  bool stopped() const override { return options_.stop && options_.stop->load(); }
+
+  void send_state() {
+    const RobotStatePacket packet = server_.state_packet();
+    if (server_.in_motion() && !state_sent_ns_) state_sent_ns_ = monotonic_ns();
+    robot_port_.send_udp(&packet, sizeof(packet));
+  }
+
+ private:
+  void receive_commands() {
     // A packet larger than any command is read whole, so that its size is judged, not truncated.
     uint8_t buffer[2048];
     for (;;) {
       sockaddr_in from{};
       socklen_t length = sizeof(from);
-      const ssize_t n = ::recvfrom(udp_.fd(), buffer, sizeof(buffer), MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&from), &length);
+      const ssize_t n = ::recvfrom(robot_port_.udp_fd(), buffer, sizeof(buffer), MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&from), &length);
       if (n < 0) return;
-      const std::optional<uint16_t> port = server_.client_udp_port();
-      if (!client_.open() || !port || from.sin_addr.s_addr != client_address_.sin_addr.s_addr || ntohs(from.sin_port) != *port) {
+      if (!robot_port_.from_client(from)) {
         ++foreign_packets_;
         continue;
       }
@@ -185,33 +231,34 @@ class Network : public rt::MessageBus {
 
   const FciServeOptions& options_;
   FciServer server_;
-  sockaddr_in address_{};
-  Socket listener_, client_, udp_;
-  sockaddr_in client_address_{};
-  bool drop_client_ = false;
+  Port robot_port_;
+  std::optional<GripperServer> gripper_;
+  std::optional<Port> gripper_port_;
   uint64_t foreign_packets_ = 0;
   std::optional<int64_t> state_sent_ns_, answered_ns_;   // the round trip of a motion's cycle
 };
 
 void Network::receive_for(int64_t wait_ns) {
-  pollfd fds[2] = {{client_.open() ? client_.fd() : listener_.fd(), POLLIN, 0}, {udp_.fd(), POLLIN, 0}};
+  pollfd fds[3] = {{robot_port_.udp_fd(), POLLIN, 0}, {robot_port_.tcp_fd(), POLLIN, 0}, {-1, POLLIN, 0}};
+  if (gripper_port_) fds[2].fd = gripper_port_->tcp_fd();   // (its UDP socket only sends)
   const timespec timeout{wait_ns / 1'000'000'000, wait_ns % 1'000'000'000};
-  if (::ppoll(fds, 2, &timeout, nullptr) <= 0) return;
-  if (fds[1].revents & POLLIN) receive_udp();
-  if (fds[0].revents & (POLLIN | POLLHUP | POLLERR)) {
-    if (client_.open()) receive_tcp();
-    else accept_client();
-  }
+  if (::ppoll(fds, 3, &timeout, nullptr) <= 0) return;
+  const short ready = POLLIN | POLLHUP | POLLERR;
+  if (fds[0].revents & POLLIN) receive_commands();
+  if (fds[1].revents & ready) robot_port_.on_tcp_readable();
+  if (fds[2].revents & ready) gripper_port_->on_tcp_readable();
 }
 
 // One robot cycle: the server steps with the command that answered the state (or none), the new
-// state goes to the client.
+// state goes to the client; the hand moves with it.
 void Network::robot_cycle(rt::CycleDriver& driver) {
   const bool lost = server_.in_motion() && !server_.answered();
   if (state_sent_ns_ && answered_ns_) driver.add_round_trip_ns(*answered_ns_ - *state_sent_ns_);
   state_sent_ns_.reset();
   answered_ns_.reset();
   server_.step();
+  if (gripper_)
+    if (const std::optional<GripperStatePacket> state = gripper_->step()) gripper_port_->send_udp(&*state, sizeof(*state));
   driver.count_cycle(lost);
   send_state();
   if (options_.after_cycle) options_.after_cycle(server_.emulator().state(), server_.last_cycle());
@@ -240,6 +287,7 @@ FciServeReport serve_fci(rt::Emulator& robot, const FciServeOptions& options) {
   report.counters = network.server().counters();
   report.emulator = robot.counters();
   report.foreign_packets = network.foreign_packets();
+  if (network.gripper()) report.gripper = network.gripper()->counters();
   report.last_reflex = robot.reflex_reason();
   return report;
 }

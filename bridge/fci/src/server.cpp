@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "csp/dynamics/arrays.hpp"
+#include "framing.hpp"
 
 namespace csp::fci {
 namespace {
@@ -111,39 +112,30 @@ void FciServer::close_connection() {
   client_udp_port_.reset();
 }
 
-bool FciServer::protocol_error(const std::string& what) {
+void FciServer::protocol_error(const std::string& what) {
   ++counters_.protocol_errors;
   diagnose("protocol error, connection closed: " + what);
-  received_.clear();
-  return false;
 }
 
 bool FciServer::receive_tcp(const uint8_t* data, std::size_t size) {
-  received_.insert(received_.end(), data, data + size);
-  while (received_.size() >= sizeof(MessageHeader)) {
-    const auto header = read_payload<MessageHeader>(received_.data());
-    // Every request has a fixed size, so a message is judged by its header before it is whole.
-    std::optional<Command> command;
+  const auto problem = [this](const MessageHeader& header) -> std::string {
     if (!client_udp_port_) {
-      if (header.command != 0) return protocol_error("the first message must be Connect (command 0), not command " + std::to_string(header.command));
-      command = Command::kConnect;
-      if (header.size != sizeof(MessageHeader) + sizeof(ConnectRequest))
-        return protocol_error("Connect of " + std::to_string(header.size) + " bytes (expected 16)");
-    } else {
-      command = command_from_code(header.command, version_);
-      if (!command || *command == Command::kConnect)
-        return protocol_error("command " + std::to_string(header.command) + " is not a request of FCI version " + std::to_string(version_) +
-                              " after Connect");
-      if (header.size != request_size(*command, version_))
-        return protocol_error(std::string(command_name(*command)) + " of " + std::to_string(header.size) + " bytes (expected " +
-                              std::to_string(request_size(*command, version_)) + ")");
+      if (header.command != 0) return "the first message must be Connect (command 0), not command " + std::to_string(header.command);
+      if (header.size != request_size(Command::kConnect, version_))
+        return "Connect of " + std::to_string(header.size) + " bytes (expected 16)";
+      return "";
     }
-    if (received_.size() < header.size) return true;   // the rest is on its way
-    const bool keep = handle_message(header, received_.data() + sizeof(MessageHeader));
-    received_.erase(received_.begin(), received_.begin() + header.size);
-    if (!keep) return false;
-  }
-  return true;
+    const std::optional<Command> command = command_from_code(header.command, version_);
+    if (!command || *command == Command::kConnect)
+      return "command " + std::to_string(header.command) + " is not a request of FCI version " + std::to_string(version_) + " after Connect";
+    if (header.size != request_size(*command, version_))
+      return std::string(command_name(*command)) + " of " + std::to_string(header.size) + " bytes (expected " +
+             std::to_string(request_size(*command, version_)) + ")";
+    return "";
+  };
+  return take_messages<MessageHeader>(
+      received_, data, size, problem, [this](const MessageHeader& header, const uint8_t* payload) { return handle_message(header, payload); },
+      [this](const std::string& what) { protocol_error(what); });
 }
 
 void FciServer::respond(Command command, uint32_t command_id, Status status, const std::vector<uint8_t>& extra) {

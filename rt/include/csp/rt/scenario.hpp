@@ -97,6 +97,7 @@ struct Scenario {
   Clock clock = Clock::kLockstep;
   uint64_t seed = 1;
   HandSettings hand;                   // the Franka Hand (franka::Gripper) and what it may grasp
+  bool has_hand = false;               // the arm wears the hand (end_effector: hand): csp fci serves its port
   VacuumSettings vacuum_gripper;       // the Cobot Pump (franka::VacuumGripper)
   bool has_vacuum_gripper = false;     // the scenario mounts a Cobot Pump (a `vacuum_gripper:` section)
   // `tissue:` the bone under the burr and the trocar ring (docs/medical.md), already among

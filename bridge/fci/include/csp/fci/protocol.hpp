@@ -207,6 +207,48 @@ struct RobotCommandPacketV7 {
 
 #pragma pack(pop)
 
+// --- The Franka Hand's server (port 1338), research-interface gripper version 3 in both libfranka
+// 0.9 and 0.13: its own header (a 16-bit command code), requests answered when the command ends,
+// and a UDP state message about every 100 ms (rt::HandSettings::state_period).
+inline constexpr uint16_t kGripperVersion = 3;
+enum class GripperCommand : uint16_t { kConnect, kHoming, kGrasp, kMove, kStop };
+enum class GripperStatus : uint16_t { kSuccess, kFail, kUnsuccessful, kAborted };   // Connect: 1 is a refused version
+const char* gripper_command_name(GripperCommand command);
+
+#pragma pack(push, 1)
+struct GripperMessageHeader {
+  uint16_t command = 0;
+  uint32_t command_id = 0;
+  uint32_t size = 0;
+};
+struct GripperConnectRequest {
+  uint16_t version = 0;
+  uint16_t udp_port = 0;
+};
+struct GripperConnectResponse {
+  uint16_t status = 0;
+  uint16_t version = 0;
+};
+struct GraspRequest {
+  double width, epsilon_inner, epsilon_outer, speed, force;
+};
+struct GripperMoveRequest {
+  double width, speed;
+};
+struct GripperStatusResponse {
+  uint16_t status = 0;
+};
+struct GripperStatePacket {
+  uint32_t message_id;
+  double width, max_width;
+  uint8_t is_grasped;
+  uint16_t temperature;
+};
+#pragma pack(pop)
+
+// The size of a gripper request message (header included); 0 for a code that is no command.
+std::size_t gripper_request_size(uint16_t command);
+
 // The size of a command packet in `version`.
 std::size_t robot_command_size(Version version);
 // A command packet of either version with the fields both have (torque_command_finished: false

@@ -1,6 +1,7 @@
 // `csp fci`: the emulated robot on the network as a Franka robot is (docs/fci.md): the command
 // port 1337 (TCP) and the 1 kHz UDP exchange of states and commands, so that an unmodified
-// libfranka connects to `address`. One client at a time; the robot outlives its clients.
+// libfranka connects to `address`; the Franka Hand on port 1338 where the robot has one. One
+// client a port at a time; the robot outlives its clients.
 #pragma once
 
 #include <atomic>
@@ -8,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "csp/fci/gripper_server.hpp"
 #include "csp/fci/server.hpp"
 #include "csp/rt/cycle_driver.hpp"
 
@@ -20,6 +22,7 @@ struct FciServeOptions {
   double lockstep_timeout = 1.0;        // lockstep: how long a motion's cycle waits [s]
   std::optional<double> duration;       // robot time to serve [s]; none: until `stop`
   FciServer::ModelLibrary model_library;
+  std::optional<rt::HandSettings> hand;   // the Franka Hand on port 1338 (none: the port stays closed)
   const std::atomic<bool>* stop = nullptr;   // set (e.g. by SIGINT) to end the run cleanly
   std::function<void()> listening;      // called once the command port accepts connections
   FciServer::Diagnostic diagnostic;     // one line per notable event (may be empty)
@@ -31,6 +34,7 @@ struct FciServeReport {
   FciCounters counters;
   rt::EmulatorCounters emulator;
   uint64_t foreign_packets = 0;         // UDP packets from another sender than the client
+  std::optional<GripperCounters> gripper;
   std::string last_reflex;
 };
 

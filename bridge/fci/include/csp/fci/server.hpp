@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "csp/fci/port_server.hpp"
 #include "csp/fci/protocol.hpp"
 #include "csp/rt/control_loop.hpp"
 
@@ -32,10 +33,8 @@ struct FciCounters {
   uint64_t client_losses = 0;          // clients gone while a motion ran
 };
 
-class FciServer {
+class FciServer : public PortServer {
  public:
-  // Sends bytes on the client's TCP connection.
-  using SendTcp = std::function<void(const std::vector<uint8_t>& bytes)>;
   // The model library's bytes for LoadModelLibrary (the robot's own model; may throw).
   using ModelLibrary = std::function<std::vector<uint8_t>()>;
   // One line per notable event.
@@ -47,16 +46,12 @@ class FciServer {
 
   Version version() const { return version_; }
 
-  // A client's TCP connection opened; its bytes go to receive_tcp(), replies to `send`.
-  void open_connection(SendTcp send);
-  // Bytes received on the connection, in any split. Returns false if the connection must be
-  // closed (a malformed message, a version the robot does not serve); the reason is a diagnostic.
-  bool receive_tcp(const uint8_t* data, std::size_t size);
-  // The connection closed. A motion still running has lost its controller: as on the robot, its
-  // missing commands end it (communication_constraints_violation) unless it is stopped first.
-  void close_connection();
-  // After a successful Connect: the client's UDP port for the state packets.
-  std::optional<uint16_t> client_udp_port() const { return client_udp_port_; }
+  // PortServer. When the connection closes, a motion still running has lost its controller: as on
+  // the robot, its missing commands end it (communication_constraints_violation).
+  void open_connection(SendTcp send) override;
+  bool receive_tcp(const uint8_t* data, std::size_t size) override;
+  void close_connection() override;
+  std::optional<uint16_t> client_udp_port() const override { return client_udp_port_; }
 
   // The state packet of the current cycle (message_id: robot time in ms).
   RobotStatePacket state_packet() const;
@@ -86,7 +81,7 @@ class FciServer {
   Status handle_move(const MessageHeader& header, const MoveRequest& request);
   Status handle_setting(Command command, const uint8_t* payload);
   void respond(Command command, uint32_t command_id, Status status, const std::vector<uint8_t>& extra = {});
-  bool protocol_error(const std::string& what);
+  void protocol_error(const std::string& what);
   void end_motion_if_over();
   void diagnose(const std::string& line) { if (diagnostic_) diagnostic_(line); }
 
