@@ -47,6 +47,7 @@ int run_fci(const FciArguments& args) {
   options.clock = scenario.clock;
   options.lockstep_timeout = args.lockstep_timeout;
   options.duration = args.scenario.duration;
+  options.faults = scenario.command_faults;
   if (scenario.has_hand) options.hand = scenario.hand;
   // The robot's own model, as the robot serves its model library (read when a client asks).
   options.model_library = [&run] { return fci::model_library_for(run.emulator().internal_model().parameters()); };
@@ -72,10 +73,11 @@ int run_fci(const FciArguments& args) {
               static_cast<unsigned long long>(r.emulator.lost_commands), r.emulator.max_consecutive_lost,
               static_cast<unsigned long long>(r.emulator.reflexes));
   std::printf("  refused requests %llu, protocol errors %llu, rejected command packets %llu, stale %llu, foreign packets %llu, "
-              "clients lost in a motion %llu\n",
+              "clients lost in a motion %llu, lost by the scenario's faults %llu\n",
               static_cast<unsigned long long>(c.refused_requests), static_cast<unsigned long long>(c.protocol_errors),
               static_cast<unsigned long long>(c.rejected_commands), static_cast<unsigned long long>(c.stale_commands),
-              static_cast<unsigned long long>(r.foreign_packets), static_cast<unsigned long long>(c.client_losses));
+              static_cast<unsigned long long>(r.foreign_packets), static_cast<unsigned long long>(c.client_losses),
+              static_cast<unsigned long long>(c.injected_losses));
   if (r.gripper)
     std::printf("  gripper: connections %llu (refused versions %llu), commands %llu, failed %llu, protocol errors %llu\n",
                 static_cast<unsigned long long>(r.gripper->connections), static_cast<unsigned long long>(r.gripper->refused_versions),

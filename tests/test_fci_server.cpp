@@ -21,10 +21,10 @@ using fci::Status;
 // A client's view of one FciServer: it sends requests and keeps the robot's replies.
 class Client {
  public:
-  explicit Client(fci::Version version, std::string scenario = "libfranka_panda")
-      : scenario_(rt::load_scenario(rt::shipped_scenario_path(scenario))),
+  explicit Client(fci::Version version, const rt::CommandFaults& faults = {})
+      : scenario_(rt::load_scenario(rt::shipped_scenario_path("libfranka_panda"))),
         robot_(scenario_.emulator),
-        server_(robot_, version, [this] { return model_library(); }, [this](const std::string& line) { lines.push_back(line); }) {
+        server_(robot_, version, [this] { return model_library(); }, [this](const std::string& line) { lines.push_back(line); }, faults) {
     server_.open_connection([this](const std::vector<uint8_t>& bytes) { replies.push_back(bytes); });
   }
 
@@ -299,6 +299,37 @@ TEST(FciServer, CommandsThatAnswerNoCurrentStateAreLost) {
   const uint64_t lost = client.robot().counters().lost_commands;
   client.cycle_without_command();
   EXPECT_EQ(client.robot().counters().lost_commands, lost + 1);
+}
+
+TEST(FciServer, TheScenariosFaultsLoseCommandsOnTheWay) {
+  // Half the commands lost: the robot's success rate over its last 100 cycles shows it.
+  rt::CommandFaults lossy;
+  lossy.loss_probability = 0.5;
+  Client client(fci::kPandaVersion, lossy);
+  ASSERT_TRUE(client.connect(fci::kPandaVersion));
+  ASSERT_TRUE(client.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointPosition, fci::MoveControllerMode::kJointImpedance)));
+  for (int k = 0; k < 300; ++k) client.cycle(hold(client.server().state_packet()));
+  const uint64_t lost = client.server().counters().injected_losses;
+  EXPECT_GT(lost, 100u);
+  EXPECT_LT(lost, 200u);
+  EXPECT_EQ(client.robot().counters().lost_commands, lost);
+  EXPECT_GT(client.server().state_packet().control_command_success_rate, 0.3);
+  EXPECT_LT(client.server().state_packet().control_command_success_rate, 0.7);
+
+  // A burst of 20 lost commands 10 ms into the motion: the robot's communication reflex.
+  rt::CommandFaults burst;
+  burst.bursts = {{0.010, 20}};
+  Client bursty(fci::kFr3Version, burst);
+  ASSERT_TRUE(bursty.connect(fci::kFr3Version));
+  ASSERT_TRUE(bursty.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointPosition, fci::MoveControllerMode::kJointImpedance)));
+  int cycles = 0;
+  while (bursty.server().in_motion() && cycles < 100) {
+    bursty.cycle(hold(bursty.server().state_packet()));
+    ++cycles;
+  }
+  EXPECT_EQ(cycles, 30);
+  EXPECT_EQ(bursty.server().counters().injected_losses, 20u);
+  EXPECT_EQ(bursty.server().state_packet().reflex_reason[static_cast<int>(rt::Error::communication_constraints_violation)], 1);
 }
 
 TEST(FciServer, SettingsAreAppliedBetweenMotionsAndRefusedWithTheRobotsStatus) {

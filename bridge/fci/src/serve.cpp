@@ -180,7 +180,7 @@ class Network : public rt::MessageBus {
  public:
   Network(rt::Emulator& robot, const FciServeOptions& options)
       : options_(options),
-        server_(robot, options.version, options.model_library, [this](const std::string& line) { diagnose(line); }),
+        server_(robot, options.version, options.model_library, [this](const std::string& line) { diagnose(line); }, options.faults),
         robot_port_(ipv4_address(options.address), kCommandPort, server_, "", [this](const std::string& line) { diagnose(line); }) {
     if (options.hand) {
       gripper_.emplace(robot, *options.hand, [this](const std::string& line) { diagnose(line); });

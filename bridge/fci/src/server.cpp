@@ -88,8 +88,13 @@ Transform pose_of(const std::array<double, 16>& column_major, const char* operat
 
 }  // namespace
 
-FciServer::FciServer(rt::Emulator& robot, Version version, ModelLibrary model_library, Diagnostic diagnostic)
-    : emulator_(robot), version_(version), model_library_(std::move(model_library)), diagnostic_(std::move(diagnostic)) {
+FciServer::FciServer(rt::Emulator& robot, Version version, ModelLibrary model_library, Diagnostic diagnostic,
+                     const rt::CommandFaults& faults)
+    : emulator_(robot),
+      version_(version),
+      model_library_(std::move(model_library)),
+      diagnostic_(std::move(diagnostic)),
+      channel_(faults) {
   command_code(Command::kConnect, version);   // throws for a version CSP does not serve
 }
 
@@ -245,6 +250,7 @@ Status FciServer::handle_move(const MessageHeader& header, const MoveRequest& re
   }
   motion_ = Motion{header.command_id, static_cast<MoveMotionGeneratorMode>(request.motion_generator_mode), controller, *mode};
   stop_requested_ = false;
+  motion_cycle_ = 0;
   ++counters_.motions;
   return Status::kSuccess;
 }
@@ -372,6 +378,7 @@ void FciServer::receive_udp(const void* data, std::size_t size) {
   if (packet->message_id != message_id() || command_)
     return reject(counters_.stale_commands, "it answers state " + std::to_string(packet->message_id) + ", the current state is " +
                                                 std::to_string(message_id()));
+  if (!channel_.delivers(motion_cycle_)) return reject(counters_.injected_losses, "lost by the scenario's faults");
   const MotionGeneratorCommandPacket& m = packet->motion;
   rt::Command command;
   switch (motion_->mode) {
@@ -393,6 +400,7 @@ void FciServer::step() {
   if (command_received_) applied_ = *command_;
   emulator_.step(command_received_ ? &*command_ : nullptr);
   command_.reset();
+  if (motion_) ++motion_cycle_;
   end_motion_if_over();
 }
 

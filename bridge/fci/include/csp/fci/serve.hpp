@@ -22,6 +22,7 @@ struct FciServeOptions {
   double lockstep_timeout = 1.0;        // lockstep: how long a motion's cycle waits [s]
   std::optional<double> duration;       // robot time to serve [s]; none: until `stop`
   FciServer::ModelLibrary model_library;
+  rt::CommandFaults faults;              // the scenario's network faults (FciServer)
   std::optional<rt::HandSettings> hand;   // the Franka Hand on port 1338 (none: the port stays closed)
   const std::atomic<bool>* stop = nullptr;   // set (e.g. by SIGINT) to end the run cleanly
   std::function<void()> listening;      // called once the command port accepts connections

@@ -31,6 +31,7 @@ struct FciCounters {
   uint64_t motions = 0;                // Move requests accepted
   uint64_t refused_requests = 0;       // requests answered with another status than Success
   uint64_t client_losses = 0;          // clients gone while a motion ran
+  uint64_t injected_losses = 0;        // commands the scenario's `faults:` lost on the way (or made late)
 };
 
 class FciServer : public PortServer {
@@ -41,8 +42,11 @@ class FciServer : public PortServer {
   using Diagnostic = std::function<void(const std::string& line)>;
 
   // `robot` is the run's emulated robot; `version` the protocol version it speaks (kPandaVersion
-  // or kFr3Version: a real Panda serves libfranka 0.9, an FR3 0.10 to 0.13).
-  FciServer(rt::Emulator& robot, Version version, ModelLibrary model_library, Diagnostic diagnostic);
+  // or kFr3Version: a real Panda serves libfranka 0.9, an FR3 0.10 to 0.13). `faults`: the
+  // scenario's network faults, applied to the commands that arrive (loss, latency past the
+  // budget, bursts; counted from each motion's start), on top of what the real network does.
+  FciServer(rt::Emulator& robot, Version version, ModelLibrary model_library, Diagnostic diagnostic,
+            const rt::CommandFaults& faults = {});
 
   Version version() const { return version_; }
 
@@ -97,7 +101,9 @@ class FciServer : public PortServer {
   std::optional<uint16_t> client_udp_port_;    // connected (after Connect)
 
   // The motion and this cycle's command
+  rt::CommandChannel channel_;
   std::optional<Motion> motion_;
+  uint64_t motion_cycle_ = 0;                  // cycles since the motion began
   bool stop_requested_ = false;                // StopMove during the motion
   std::optional<rt::Command> command_;
   bool command_received_ = false;              // the previous step applied a command
