@@ -22,7 +22,7 @@ struct FciArguments {
   std::string csv;
 };
 
-// The protocol a robot speaks: an FR3 libfranka 0.10 to 0.13 (version 7), a Panda libfranka 0.9
+// The protocol a robot speaks: an FR3 libfranka 0.13 (version 7), a Panda libfranka 0.9
 // (version 5), as their system software does; a robot file names its arm.
 fci::Version protocol_version(const rt::Scenario& scenario) {
   return load_robot_config(scenario.robot_file).name == "fr3" ? fci::kFr3Version : fci::kPandaVersion;
@@ -54,7 +54,7 @@ int run_fci(const FciArguments& args) {
   options.diagnostic = [](const std::string& line) { std::cerr << "csp fci: " << line << '\n'; };
   options.listening = [&] {
     std::printf("csp fci: %s (%s), FCI version %d (libfranka %s), %s clock, listening on %s:%d%s\n", scenario.name.c_str(),
-                scenario.path.c_str(), options.version, options.version == fci::kFr3Version ? "0.10 to 0.13" : "0.9",
+                scenario.path.c_str(), options.version, options.version == fci::kFr3Version ? "0.13" : "0.9",
                 rt::clock_name(options.clock), args.address.c_str(), fci::kCommandPort, options.hand ? " (the hand on 1338)" : "");
     std::fflush(stdout);
   };

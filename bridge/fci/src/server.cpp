@@ -167,7 +167,7 @@ bool FciServer::handle_connect(const MessageHeader& header, const uint8_t* paylo
     ++counters_.refused_versions;
     respond(Command::kConnect, header.command_id, Status::kIncompatibleLibraryVersion, robot_version);
     diagnose("client of FCI version " + std::to_string(request.version) + " refused: this robot speaks version " +
-             std::to_string(version_) + (version_ == kPandaVersion ? " (libfranka 0.9)" : " (libfranka 0.10 to 0.13)"));
+             std::to_string(version_) + (version_ == kPandaVersion ? " (libfranka 0.9)" : " (libfranka 0.13)"));
     return false;
   }
   client_udp_port_ = request.udp_port;

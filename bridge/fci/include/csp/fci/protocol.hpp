@@ -1,6 +1,6 @@
 // The FCI research interface on the wire, as the robot speaks it (docs/fci.md): the TCP messages of
 // the command port (1337) and the UDP state and command packets of the 1 kHz exchange, for the two
-// protocol versions CSP serves: 5 (libfranka 0.9.x, the Panda) and 7 (libfranka 0.10-0.13, the FR3).
+// protocol versions CSP serves: 5 (libfranka 0.9.x, the Panda) and 7 (libfranka 0.13.x, the FR3).
 //
 // Written from libfranka's research-interface headers (common/include/research_interface/robot in
 // ../shared/vendor), not copied: CSP's own structs, every field in the robot's order, packed as the
@@ -21,7 +21,7 @@ namespace csp::fci {
 
 using Version = uint16_t;
 inline constexpr Version kPandaVersion = 5;   // libfranka 0.9.x (Panda system >= 4.2.1)
-inline constexpr Version kFr3Version = 7;     // libfranka 0.10 to 0.13 (FR3)
+inline constexpr Version kFr3Version = 7;     // libfranka 0.13.x (FR3; its earlier releases speak other versions)
 inline constexpr uint16_t kCommandPort = 1337;
 inline constexpr uint16_t kGripperPort = 1338;
 

@@ -42,7 +42,7 @@ class FciServer : public PortServer {
   using Diagnostic = std::function<void(const std::string& line)>;
 
   // `robot` is the run's emulated robot; `version` the protocol version it speaks (kPandaVersion
-  // or kFr3Version: a real Panda serves libfranka 0.9, an FR3 0.10 to 0.13). `faults`: the
+  // or kFr3Version: a real Panda serves libfranka 0.9, an FR3 of system 5.5 libfranka 0.13). `faults`: the
   // scenario's network faults, applied to the commands that arrive (loss, latency past the
   // budget, bursts; counted from each motion's start), on top of what the real network does.
   FciServer(rt::Emulator& robot, Version version, ModelLibrary model_library, Diagnostic diagnostic,
