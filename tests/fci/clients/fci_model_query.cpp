@@ -2,7 +2,9 @@
 // Franka user computes it: connect, load the model (the robot's LoadModelLibrary: the library the
 // robot serves is what computes), move a little, take the state in the middle of the motion
 // (dq not zero: Coriolis means something) and print, on one line of JSON, that state's q and dq
-// and the model's quantities there. tests/fci/run_client.py compares them with `csp model`.
+// and the model's quantities there. Gravity twice: gravity(state), which takes the gravity vector
+// from the state's O_ddP_O (libfranka: "hardcoded for now to {0, 0, -9.81}"), and with that
+// vector given explicitly. tests/fci/run_client.py compares them with `csp model`.
 #include <cmath>
 #include <iostream>
 #include <optional>
@@ -51,7 +53,8 @@ int main(int argc, char** argv) {
               << ",\"F_T_EE\":" << json_array(s.F_T_EE) << ",\"m_total\":" << json_array(std::array<double, 1>{s.m_total})
               << ",\"F_x_Ctotal\":" << json_array(s.F_x_Ctotal) << ",\"I_total\":" << json_array(s.I_total)
               << ",\"mass\":" << json_array(model.mass(s)) << ",\"coriolis\":" << json_array(model.coriolis(s))
-              << ",\"gravity\":" << json_array(model.gravity(s))
+              << ",\"O_ddP_O\":" << json_array(s.O_ddP_O) << ",\"gravity\":" << json_array(model.gravity(s))
+              << ",\"gravity_earth\":" << json_array(model.gravity(s, {0.0, 0.0, -9.81}))
               << ",\"pose_flange\":" << json_array(model.pose(franka::Frame::kFlange, s))
               << ",\"pose_end_effector\":" << json_array(model.pose(franka::Frame::kEndEffector, s))
               << ",\"zero_jacobian_end_effector\":" << json_array(model.zeroJacobian(franka::Frame::kEndEffector, s))
