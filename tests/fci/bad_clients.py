@@ -311,7 +311,7 @@ class Test:
         if "communication_constraints_violation" not in state["last_motion_errors"]:
             self.failures.append(f"after the vanished client, libfranka's state shows last_motion_errors "
                                  f"{state['last_motion_errors']}, expected communication_constraints_violation "
-                                 "(which csp fci's diagnostics name)")
+                                 "(which csp fci's diagnostics name; docs/fci-client-builds.md, \"Failing now\")")
 
     def run(self):
         command = [self.options.csp, "fci", self.options.scenario, "--address", self.options.address,

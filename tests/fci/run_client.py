@@ -136,7 +136,8 @@ def check_model(options, server):
     ]
     differences = [d for d in differences if d]
     if differences:
-        raise CheckFailed("libfranka's franka::Model at csp fci: " + "; ".join(differences))
+        raise CheckFailed("libfranka's franka::Model at csp fci: " + "; ".join(differences) +
+                          " (docs/fci-client-builds.md, \"Failing now\")")
 
 
 # ---------------------------------------------------------------------------------------------
