@@ -48,6 +48,10 @@ int main(int argc, char** argv) {
       return command;
     });
 
+    if (!sample) {   // the motion ended early without an exception: nothing to report
+      std::cout << "the motion ended before " << kSampleSeconds << " s\n";
+      return 1;
+    }
     const franka::RobotState& s = *sample;
     std::cout << "{\"q\":" << json_array(s.q) << ",\"dq\":" << json_array(s.dq)
               << ",\"F_T_EE\":" << json_array(s.F_T_EE) << ",\"m_total\":" << json_array(std::array<double, 1>{s.m_total})
