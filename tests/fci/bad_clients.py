@@ -36,6 +36,11 @@ MOVE = struct.Struct("<II6d")                   # controller mode, motion genera
 # The UDP robot state, up to q_d: message_id, 6 poses, m_ee, I_ee, F_x_Cee, m_load, I_load,
 # F_x_Cload, elbow, elbow_d, tau_J, tau_J_d, dtau_J, q, q_d.
 STATE_PREFIX = struct.Struct("<Q" + "16d" * 6 + "d9d3dd9d3d2d2d" + "7d" * 5)
+# The whole state: then dq, dq_d, ddq_d, joint_contact, cartesian_contact, joint_collision,
+# cartesian_collision, tau_ext_hat_filtered, O_F_ext_hat_K, K_F_ext_hat_K, O_dP_EE_d, O_ddP_O, elbow_c,
+# delbow_c, ddelbow_c, O_T_EE_c, O_dP_EE_c, O_ddP_EE_c, theta, dtheta, the two mode codes, errors,
+# reflex_reason, robot_mode, control_command_success_rate.
+STATE_SIZE = STATE_PREFIX.size + struct.calcsize("<" + "7d" * 4 + "6d7d6d7d6d6d6d3d2d2d2d16d6d6d7d7d" + "BB41s41sBd")
 Q_OFFSET = 1 + 96 + 1 + 9 + 3 + 1 + 9 + 3 + 2 + 2 + 21   # index of q[0] in STATE_PREFIX's values
 # The motion generator and torque command: message_id, q_c, dq_c, O_T_EE_c, O_dP_EE_c, elbow_c,
 # valid_elbow, motion_generation_finished, tau_J_d (version 7 adds torque_command_finished).
@@ -268,6 +273,7 @@ class Test:
         self.wait_for_diagnostic(rf"UDP command packet dropped: 100 bytes, expected {expected_size}", "a packet of 100 bytes")
         self.wait_for_diagnostic(rf"UDP command packet dropped: it answers state {message_id}, the current state is {newer}",
                                  "a packet answering an old state")
+        check(state_size == STATE_SIZE, f"a robot state of {state_size} bytes, expected {STATE_SIZE}")
         print(f"state packets of {state_size} bytes; old state {message_id} answered at state {newer}", flush=True)
         # Then the client behaves: holds still for 50 cycles, finishes, and the motion succeeds.
         client.hold(message_id, q_start, 50, finish=True)
