@@ -255,8 +255,17 @@ def main():
             command = example_command(options.example, options.address, options.arguments,
                                       options.realtime_kernel, fake_sys_kernel)
             print("$ " + shlex.join(command), flush=True)
+            started = time.monotonic()
             code, output = run_example(name, command, options.stop_after, options.time_limit)
+            wall_seconds = time.monotonic() - started
             server.stop()
+        # For the record (no check: a timed assertion would fail on a loaded machine): the robot
+        # time the example's motions took (csp fci's count of motion cycles, 1 ms each) and the
+        # example's wall time, which on the lockstep clock may be the shorter.
+        motion_cycles = re.search(r"motion cycles (\d+)", server.output())
+        if motion_cycles:
+            print(f"{name}: motions {int(motion_cycles.group(1)) / 1000:.3f} s robot time, "
+                  f"example {wall_seconds:.3f} s wall time", flush=True)
         error = libfranka_error(output)
         if error:
             raise CheckFailed(f"{name} reported an error: {error}")
