@@ -4,6 +4,8 @@
 // a namespace of its own, CSP_FCI_VENDOR, and defines CSP_FCI_VERSION and CSP_FCI_SUITE.
 #include <cstddef>
 #include <cstring>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -186,6 +188,59 @@ TEST(CSP_FCI_SUITE, TheModeCodesAreLibfrankas) {
   EXPECT_EQ(static_cast<uint32_t>(fci::MoveMotionGeneratorMode::kNone), static_cast<uint32_t>(ri::Move::MotionGeneratorMode::kNone));
   EXPECT_EQ(static_cast<uint8_t>(fci::StateMotionGeneratorMode::kNone), static_cast<uint8_t>(ri::MotionGeneratorMode::kNone));
 #endif
+}
+
+// Each error flag where libfranka reads it (its Errors binds every field to its Error by name).
+TEST(CSP_FCI_SUITE, TheErrorFlagsAreInTheResearchInterfacesOrder) {
+  using E = ri::Error;
+  using R = csp::rt::Error;
+  const std::vector<std::pair<R, E>> pairs = {
+      {R::joint_position_limits_violation, E::kJointPositionLimitsViolation},
+      {R::cartesian_position_limits_violation, E::kCartesianPositionLimitsViolation},
+      {R::self_collision_avoidance_violation, E::kSelfcollisionAvoidanceViolation},
+      {R::joint_velocity_violation, E::kJointVelocityViolation},
+      {R::cartesian_velocity_violation, E::kCartesianVelocityViolation},
+      {R::force_control_safety_violation, E::kForceControlSafetyViolation},
+      {R::joint_reflex, E::kJointReflex},
+      {R::cartesian_reflex, E::kCartesianReflex},
+      {R::max_goal_pose_deviation_violation, E::kMaxGoalPoseDeviationViolation},
+      {R::max_path_pose_deviation_violation, E::kMaxPathPoseDeviationViolation},
+      {R::cartesian_velocity_profile_safety_violation, E::kCartesianVelocityProfileSafetyViolation},
+      {R::joint_position_motion_generator_start_pose_invalid, E::kJointPositionMotionGeneratorStartPoseInvalid},
+      {R::joint_motion_generator_position_limits_violation, E::kJointMotionGeneratorPositionLimitsViolation},
+      {R::joint_motion_generator_velocity_limits_violation, E::kJointMotionGeneratorVelocityLimitsViolation},
+      {R::joint_motion_generator_velocity_discontinuity, E::kJointMotionGeneratorVelocityDiscontinuity},
+      {R::joint_motion_generator_acceleration_discontinuity, E::kJointMotionGeneratorAccelerationDiscontinuity},
+      {R::cartesian_position_motion_generator_start_pose_invalid, E::kCartesianPositionMotionGeneratorStartPoseInvalid},
+      {R::cartesian_motion_generator_elbow_limit_violation, E::kCartesianMotionGeneratorElbowLimitViolation},
+      {R::cartesian_motion_generator_velocity_limits_violation, E::kCartesianMotionGeneratorVelocityLimitsViolation},
+      {R::cartesian_motion_generator_velocity_discontinuity, E::kCartesianMotionGeneratorVelocityDiscontinuity},
+      {R::cartesian_motion_generator_acceleration_discontinuity, E::kCartesianMotionGeneratorAccelerationDiscontinuity},
+      {R::cartesian_motion_generator_elbow_sign_inconsistent, E::kCartesianMotionGeneratorElbowSignInconsistent},
+      {R::cartesian_motion_generator_start_elbow_invalid, E::kCartesianMotionGeneratorStartElbowInvalid},
+      {R::cartesian_motion_generator_joint_position_limits_violation, E::kCartesianMotionGeneratorJointPositionLimitsViolation},
+      {R::cartesian_motion_generator_joint_velocity_limits_violation, E::kCartesianMotionGeneratorJointVelocityLimitsViolation},
+      {R::cartesian_motion_generator_joint_velocity_discontinuity, E::kCartesianMotionGeneratorJointVelocityDiscontinuity},
+      {R::cartesian_motion_generator_joint_acceleration_discontinuity, E::kCartesianMotionGeneratorJointAccelerationDiscontinuity},
+      {R::cartesian_position_motion_generator_invalid_frame, E::kCartesianPositionMotionGeneratorInvalidFrame},
+      {R::force_controller_desired_force_tolerance_violation, E::kForceControllerDesiredForceToleranceViolation},
+      {R::controller_torque_discontinuity, E::kControllerTorqueDiscontinuity},
+      {R::start_elbow_sign_inconsistent, E::kStartElbowSignInconsistent},
+      {R::communication_constraints_violation, E::kCommunicationConstraintsViolation},
+      {R::power_limit_violation, E::kPowerLimitViolation},
+      {R::joint_p2p_insufficient_torque_for_planning, E::kJointP2PInsufficientTorqueForPlanning},
+      {R::tau_j_range_violation, E::kTauJRangeViolation},
+      {R::instability_detected, E::kInstabilityDetection},
+      {R::joint_move_in_wrong_direction, E::kJointMoveInWrongDirection},
+      {R::cartesian_spline_motion_generator_violation, E::kCartesianSplineViolation},
+      {R::joint_via_motion_generator_planning_joint_limit_violation, E::kJointViaPlanLimitViolation},
+      {R::base_acceleration_initialization_timeout, E::kBaseAccelerationInitializationTimeout},
+      {R::base_acceleration_invalid_reading, E::kBaseAccelerationInvalidReading},
+  };
+  ASSERT_EQ(pairs.size(), static_cast<std::size_t>(csp::rt::kNumErrors));
+  EXPECT_EQ(static_cast<std::size_t>(E::kBaseAccelerationInvalidReading) + 1, pairs.size());
+  for (const auto& [error, wire] : pairs)
+    EXPECT_EQ(fci::wire_error_index(error), static_cast<int>(wire)) << csp::rt::error_name(error);
 }
 
 TEST(CSP_FCI_SUITE, TheRobotStateHasLibfrankasLayout) {

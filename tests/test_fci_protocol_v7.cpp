@@ -1,11 +1,14 @@
 // CSP's FCI version 7 wire format against libfranka 0.13.3's research-interface headers (fci_protocol_checks.hpp).
 #include <array>
 #include <cstdint>
+#include <cstddef>
 #include <cstring>
+#include <stdexcept>
 #include <type_traits>
 
 // libfranka 0.13.3's headers in a namespace of their own: the other version's test declares the same names.
 namespace vendor_v7 {
+#include <research_interface/robot/error.h>
 #include <research_interface/robot/rbk_types.h>
 #include <research_interface/robot/service_types.h>
 #include <research_interface/gripper/types.h>

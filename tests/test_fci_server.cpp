@@ -240,7 +240,7 @@ TEST(FciServer, AReflexAbortsTheMoveAndShowsItsErrorUntilRecovery) {
     EXPECT_EQ(client.reply(2).status, client.code(Command::kMove, Status::kReflexAborted));
     const fci::RobotStatePacket reflex = client.server().state_packet();
     EXPECT_EQ(reflex.robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kReflex));
-    const int velocity = static_cast<int>(rt::Error::joint_motion_generator_velocity_limits_violation);
+    const int velocity = fci::wire_error_index(rt::Error::joint_motion_generator_velocity_limits_violation);
     EXPECT_EQ(reflex.reflex_reason[velocity], 1);
     EXPECT_EQ(reflex.errors[velocity], 1);
 
@@ -273,7 +273,7 @@ TEST(FciServer, AClientThatVanishesMidMotionEndsItAsTheRobotWould) {
   EXPECT_FALSE(client.server().in_motion());
   const fci::RobotStatePacket state = client.server().state_packet();
   EXPECT_EQ(state.robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kReflex));
-  EXPECT_EQ(state.reflex_reason[static_cast<int>(rt::Error::communication_constraints_violation)], 1);
+  EXPECT_EQ(state.reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)], 1);
   EXPECT_EQ(client.replies.size(), 2u) << "no answer goes to a client that has gone";
 
   // The robot outlives its client: the next one finds it where it stopped, in Reflex mode.
@@ -329,7 +329,7 @@ TEST(FciServer, TheScenariosFaultsLoseCommandsOnTheWay) {
   }
   EXPECT_EQ(cycles, 30);
   EXPECT_EQ(bursty.server().counters().injected_losses, 20u);
-  EXPECT_EQ(bursty.server().state_packet().reflex_reason[static_cast<int>(rt::Error::communication_constraints_violation)], 1);
+  EXPECT_EQ(bursty.server().state_packet().reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)], 1);
 }
 
 TEST(FciServer, SettingsAreAppliedBetweenMotionsAndRefusedWithTheRobotsStatus) {

@@ -250,15 +250,11 @@ std::optional<rt::ControlMode> control_mode_from_code(int8_t code) {
 void apply_configuration(const config_request_t& r, rt::Emulator& emulator) {
   switch (r.request) {
     case config_request_t::SET_COLLISION_BEHAVIOR: {
-      rt::CollisionBehavior b;
-      b.lower_torque_acceleration = from_array<Vector7>(r.lower_torque_thresholds_acceleration);
-      b.upper_torque_acceleration = from_array<Vector7>(r.upper_torque_thresholds_acceleration);
-      b.lower_torque_nominal = from_array<Vector7>(r.lower_torque_thresholds_nominal);
-      b.upper_torque_nominal = from_array<Vector7>(r.upper_torque_thresholds_nominal);
-      b.lower_force_acceleration = from_array<Vector6>(r.lower_force_thresholds_acceleration);
-      b.upper_force_acceleration = from_array<Vector6>(r.upper_force_thresholds_acceleration);
-      b.lower_force_nominal = from_array<Vector6>(r.lower_force_thresholds_nominal);
-      b.upper_force_nominal = from_array<Vector6>(r.upper_force_thresholds_nominal);
+      const rt::CollisionBehavior b = rt::collision_behavior(
+          std::to_array(r.lower_torque_thresholds_acceleration), std::to_array(r.upper_torque_thresholds_acceleration),
+          std::to_array(r.lower_torque_thresholds_nominal), std::to_array(r.upper_torque_thresholds_nominal),
+          std::to_array(r.lower_force_thresholds_acceleration), std::to_array(r.upper_force_thresholds_acceleration),
+          std::to_array(r.lower_force_thresholds_nominal), std::to_array(r.upper_force_thresholds_nominal));
       for (const auto* v : {&b.lower_torque_acceleration, &b.upper_torque_acceleration, &b.lower_torque_nominal, &b.upper_torque_nominal})
         if (!v->allFinite() || (v->array() < 0.0).any())
           throw std::invalid_argument("setCollisionBehavior: expected finite non-negative torque thresholds");

@@ -109,13 +109,6 @@ void RobotServer::step(int64_t utime) {
   }
 }
 
-rt::CycleInfo RobotServer::last_cycle() const {
-  rt::CycleInfo cycle;
-  // The server sees only what arrived: a command sent but lost on the way is not known here.
-  cycle.command_sent = command_received_;
-  cycle.command_received = command_received_;
-  if (command_received_) cycle.command = applied_;
-  return cycle;
-}
+rt::CycleInfo RobotServer::last_cycle() const { return rt::received_cycle(command_received_, applied_); }
 
 }  // namespace csp::bridge

@@ -112,6 +112,26 @@ const char* controller_mode_name(ControllerMode mode) {
   return "unknown";
 }
 
+CollisionBehavior collision_behavior(const std::array<double, 7>& lower_torque_acceleration,
+                                     const std::array<double, 7>& upper_torque_acceleration,
+                                     const std::array<double, 7>& lower_torque_nominal,
+                                     const std::array<double, 7>& upper_torque_nominal,
+                                     const std::array<double, 6>& lower_force_acceleration,
+                                     const std::array<double, 6>& upper_force_acceleration,
+                                     const std::array<double, 6>& lower_force_nominal,
+                                     const std::array<double, 6>& upper_force_nominal) {
+  CollisionBehavior b;
+  b.lower_torque_acceleration = from_array<Vector7>(lower_torque_acceleration);
+  b.upper_torque_acceleration = from_array<Vector7>(upper_torque_acceleration);
+  b.lower_torque_nominal = from_array<Vector7>(lower_torque_nominal);
+  b.upper_torque_nominal = from_array<Vector7>(upper_torque_nominal);
+  b.lower_force_acceleration = from_array<Vector6>(lower_force_acceleration);
+  b.upper_force_acceleration = from_array<Vector6>(upper_force_acceleration);
+  b.lower_force_nominal = from_array<Vector6>(lower_force_nominal);
+  b.upper_force_nominal = from_array<Vector6>(upper_force_nominal);
+  return b;
+}
+
 CollisionBehavior default_collision_behavior() {
   CollisionBehavior b;
   b.lower_torque_acceleration = b.upper_torque_acceleration = Vector7::Constant(20.0);
@@ -754,7 +774,9 @@ void Emulator::publish() {
   assign(s.EE_T_K, p.EE_T_K);
   forward_kinematics(internal_, internal_data_, q_d);   // the desired pose, also the one Idle holds
   assign(s.O_T_EE_d, internal_data_.O_T_EE);
-  assign(s.O_ddP_O, Vector3(-p.gravity));
+  // libfranka: "If the base is resting this shows the gravity vector. It is hardcoded for now to
+  // {0, 0, -9.81}" (robot_state.h); franka::Model::gravity(state) passes it as gravity_earth.
+  assign(s.O_ddP_O, p.gravity);
 
   // The motion generator's rates as the robot reports them (zero in torque mode, as libfranka's):
   // the EE twist J(q_c) dq_c, the EE acceleration J ddq_c + dJ/dt dq_c, the elbow's joint-3 rates.

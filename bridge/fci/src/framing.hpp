@@ -11,6 +11,14 @@
 
 namespace csp::fci {
 
+// A request's fixed-size payload (packed, possibly unaligned in the buffer).
+template <typename T>
+T read_payload(const uint8_t* payload) {
+  T value;
+  std::memcpy(&value, payload, sizeof(T));
+  return value;
+}
+
 // Appends `data` to `buffer` and hands over every complete message. `problem(header)` names what
 // is wrong with a header (empty: nothing, and header.size is the message's size); `handle(header,
 // payload)` returns false when the message ends the connection; `refuse(problem)` reports one.

@@ -7,13 +7,6 @@
 namespace csp::fci {
 namespace {
 
-template <typename T>
-T read_payload(const uint8_t* payload) {
-  T value;
-  std::memcpy(&value, payload, sizeof(T));
-  return value;
-}
-
 uint16_t status_of(rt::CommandStatus status) {
   switch (status) {
     case rt::CommandStatus::kSuccess: return static_cast<uint16_t>(GripperStatus::kSuccess);

@@ -1,6 +1,7 @@
 #include "csp/fci/protocol.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <stdexcept>
 #include <vector>
@@ -60,7 +61,56 @@ std::vector<Status> statuses(Command command, Version version) {
   }
 }
 
+// The research interface's order of the error flags (libfranka-common's robot/error.h).
+constexpr std::array<rt::Error, rt::kNumErrors> kWireErrorOrder = {
+    rt::Error::joint_position_limits_violation,
+    rt::Error::cartesian_position_limits_violation,
+    rt::Error::self_collision_avoidance_violation,
+    rt::Error::joint_velocity_violation,
+    rt::Error::cartesian_velocity_violation,
+    rt::Error::force_control_safety_violation,
+    rt::Error::joint_reflex,
+    rt::Error::cartesian_reflex,
+    rt::Error::max_goal_pose_deviation_violation,
+    rt::Error::max_path_pose_deviation_violation,
+    rt::Error::cartesian_velocity_profile_safety_violation,
+    rt::Error::joint_position_motion_generator_start_pose_invalid,
+    rt::Error::joint_motion_generator_position_limits_violation,
+    rt::Error::joint_motion_generator_velocity_limits_violation,
+    rt::Error::joint_motion_generator_velocity_discontinuity,
+    rt::Error::joint_motion_generator_acceleration_discontinuity,
+    rt::Error::cartesian_position_motion_generator_start_pose_invalid,
+    rt::Error::cartesian_motion_generator_elbow_limit_violation,
+    rt::Error::cartesian_motion_generator_velocity_limits_violation,
+    rt::Error::cartesian_motion_generator_velocity_discontinuity,
+    rt::Error::cartesian_motion_generator_acceleration_discontinuity,
+    rt::Error::cartesian_motion_generator_elbow_sign_inconsistent,
+    rt::Error::cartesian_motion_generator_start_elbow_invalid,
+    rt::Error::force_controller_desired_force_tolerance_violation,
+    rt::Error::start_elbow_sign_inconsistent,
+    rt::Error::communication_constraints_violation,
+    rt::Error::power_limit_violation,
+    rt::Error::cartesian_motion_generator_joint_position_limits_violation,
+    rt::Error::cartesian_motion_generator_joint_velocity_limits_violation,
+    rt::Error::cartesian_motion_generator_joint_velocity_discontinuity,
+    rt::Error::cartesian_motion_generator_joint_acceleration_discontinuity,
+    rt::Error::cartesian_position_motion_generator_invalid_frame,
+    rt::Error::controller_torque_discontinuity,
+    rt::Error::joint_p2p_insufficient_torque_for_planning,
+    rt::Error::tau_j_range_violation,
+    rt::Error::instability_detected,
+    rt::Error::joint_move_in_wrong_direction,
+    rt::Error::cartesian_spline_motion_generator_violation,
+    rt::Error::joint_via_motion_generator_planning_joint_limit_violation,
+    rt::Error::base_acceleration_initialization_timeout,
+    rt::Error::base_acceleration_invalid_reading,
+};
+
 }  // namespace
+
+int wire_error_index(rt::Error error) {
+  return static_cast<int>(std::find(kWireErrorOrder.begin(), kWireErrorOrder.end(), error) - kWireErrorOrder.begin());
+}
 
 const char* command_name(Command command) {
   switch (command) {

@@ -195,7 +195,7 @@ class Network : public rt::MessageBus {
 
   // MessageBus
   void receive_for(int64_t wait_ns) override;
-  bool in_session() const override { return server_.in_motion(); }
+  bool in_session() const override { return server_.commands_flowing(); }
   bool answered() const override { return server_.answered(); }
   void robot_cycle(rt::CycleDriver& driver) override;
   void repeat_state() override { send_state(); }

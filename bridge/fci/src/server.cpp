@@ -17,13 +17,6 @@ bool is_power_of_ten(uint64_t n) {
 }
 
 template <typename T>
-T read_payload(const uint8_t* payload) {
-  T value;
-  std::memcpy(&value, payload, sizeof(T));
-  return value;
-}
-
-template <typename T>
 std::vector<uint8_t> bytes_of(const T& value) {
   std::vector<uint8_t> bytes(sizeof(T));
   std::memcpy(bytes.data(), &value, sizeof(T));
@@ -75,7 +68,7 @@ uint8_t robot_mode_code(rt::RobotMode mode) {
 std::array<uint8_t, 41> error_flags(const franka::Errors& errors) {
   const rt::ErrorSet set(errors);
   std::array<uint8_t, 41> bytes{};
-  for (int i = 0; i < rt::kNumErrors; ++i) bytes[i] = set.flags()[i] ? 1 : 0;
+  for (int i = 0; i < rt::kNumErrors; ++i) bytes[wire_error_index(static_cast<rt::Error>(i))] = set.flags()[i] ? 1 : 0;
   return bytes;
 }
 
@@ -261,16 +254,10 @@ Status FciServer::handle_setting(Command command, const uint8_t* payload) {
     switch (command) {
       case Command::kSetCollisionBehavior: {
         const auto r = read_payload<CollisionBehaviorRequest>(payload);
-        rt::CollisionBehavior b;
-        b.lower_torque_acceleration = from_array<Vector7>(r.lower_torque_thresholds_acceleration);
-        b.upper_torque_acceleration = from_array<Vector7>(r.upper_torque_thresholds_acceleration);
-        b.lower_torque_nominal = from_array<Vector7>(r.lower_torque_thresholds_nominal);
-        b.upper_torque_nominal = from_array<Vector7>(r.upper_torque_thresholds_nominal);
-        b.lower_force_acceleration = from_array<Vector6>(r.lower_force_thresholds_acceleration);
-        b.upper_force_acceleration = from_array<Vector6>(r.upper_force_thresholds_acceleration);
-        b.lower_force_nominal = from_array<Vector6>(r.lower_force_thresholds_nominal);
-        b.upper_force_nominal = from_array<Vector6>(r.upper_force_thresholds_nominal);
-        emulator_.set_collision_behavior(b);
+        emulator_.set_collision_behavior(rt::collision_behavior(
+            r.lower_torque_thresholds_acceleration, r.upper_torque_thresholds_acceleration, r.lower_torque_thresholds_nominal,
+            r.upper_torque_thresholds_nominal, r.lower_force_thresholds_acceleration, r.upper_force_thresholds_acceleration,
+            r.lower_force_thresholds_nominal, r.upper_force_thresholds_nominal));
         break;
       }
       case Command::kSetJointImpedance:
@@ -393,6 +380,7 @@ void FciServer::receive_udp(const void* data, std::size_t size) {
   command.motion_finished = motion_->mode == rt::ControlMode::kTorque ? packet->torque_command_finished != 0
                                                                        : m.motion_generation_finished != 0;
   command_ = command;
+  motion_->commanded = true;
 }
 
 void FciServer::step() {
@@ -417,13 +405,6 @@ void FciServer::end_motion_if_over() {
   stop_requested_ = false;
 }
 
-rt::CycleInfo FciServer::last_cycle() const {
-  rt::CycleInfo cycle;
-  // The server sees only what arrived: a command sent but lost on the way is not known here.
-  cycle.command_sent = command_received_;
-  cycle.command_received = command_received_;
-  if (command_received_) cycle.command = applied_;
-  return cycle;
-}
+rt::CycleInfo FciServer::last_cycle() const { return rt::received_cycle(command_received_, applied_); }
 
 }  // namespace csp::fci

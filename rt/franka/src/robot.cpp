@@ -394,15 +394,10 @@ void Robot::setCollisionBehavior(const std::array<double, 7>& lower_torque_thres
                                  const std::array<double, 6>& upper_force_thresholds_acceleration,
                                  const std::array<double, 6>& lower_force_thresholds_nominal,
                                  const std::array<double, 6>& upper_force_thresholds_nominal) {
-  csp::rt::CollisionBehavior b;
-  b.lower_torque_acceleration = from_array<csp::Vector7>(lower_torque_thresholds_acceleration);
-  b.upper_torque_acceleration = from_array<csp::Vector7>(upper_torque_thresholds_acceleration);
-  b.lower_torque_nominal = from_array<csp::Vector7>(lower_torque_thresholds_nominal);
-  b.upper_torque_nominal = from_array<csp::Vector7>(upper_torque_thresholds_nominal);
-  b.lower_force_acceleration = from_array<csp::Vector6>(lower_force_thresholds_acceleration);
-  b.upper_force_acceleration = from_array<csp::Vector6>(upper_force_thresholds_acceleration);
-  b.lower_force_nominal = from_array<csp::Vector6>(lower_force_thresholds_nominal);
-  b.upper_force_nominal = from_array<csp::Vector6>(upper_force_thresholds_nominal);
+  const csp::rt::CollisionBehavior b = csp::rt::collision_behavior(
+      lower_torque_thresholds_acceleration, upper_torque_thresholds_acceleration, lower_torque_thresholds_nominal,
+      upper_torque_thresholds_nominal, lower_force_thresholds_acceleration, upper_force_thresholds_acceleration,
+      lower_force_thresholds_nominal, upper_force_thresholds_nominal);
   configure(*impl_, [&] { impl_->emulator.set_collision_behavior(b); });
 }
 

@@ -54,7 +54,7 @@ struct RobotState {
   std::array<double, 6> O_F_ext_hat_K{};        // estimated external wrench on K, base-frame axes [N x3, N m x3]
   std::array<double, 6> K_F_ext_hat_K{};        // estimated external wrench on K, K axes [N x3, N m x3]
   std::array<double, 6> O_dP_EE_d{};            // desired EE twist in the base frame [m/s x3, rad/s x3]
-  std::array<double, 3> O_ddP_O{};              // base acceleration, base frame; at rest minus gravity [m/s^2]
+  std::array<double, 3> O_ddP_O{};              // base acceleration, base frame; at rest the gravity vector, {0, 0, -9.81} [m/s^2]
   std::array<double, 16> O_T_EE_c{};            // last commanded EE pose of motion generation, base frame
   std::array<double, 6> O_dP_EE_c{};            // last commanded EE twist in the base frame [m/s x3, rad/s x3]
   std::array<double, 6> O_ddP_EE_c{};           // last commanded EE acceleration, base frame [m/s^2 x3, rad/s^2 x3]

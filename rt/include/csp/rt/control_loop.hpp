@@ -53,6 +53,16 @@ struct CycleInfo {
   Command command;                // what was sent
 };
 
+// A cycle as a server on a network sees it: only what arrived (a command sent but lost on the way
+// is not known there). `applied`: the command the cycle applied, if one was received.
+inline CycleInfo received_cycle(bool command_received, const Command& applied) {
+  CycleInfo cycle;
+  cycle.command_sent = command_received;
+  cycle.command_received = command_received;
+  if (command_received) cycle.command = applied;
+  return cycle;
+}
+
 using Controller = std::function<Command(const RobotState&, Duration)>;
 using CycleObserver = std::function<void(const RobotState&, const CycleInfo&)>;
 

@@ -86,6 +86,16 @@ struct CollisionBehavior {
 };
 // The values of libfranka's examples (setDefaultBehavior): 20 during acceleration, 10 nominal.
 CollisionBehavior default_collision_behavior();
+// From libfranka's eight arrays, in Robot::setCollisionBehavior's order, as every front end
+// receives them (the franka API, LCM, the FCI).
+CollisionBehavior collision_behavior(const std::array<double, 7>& lower_torque_acceleration,
+                                     const std::array<double, 7>& upper_torque_acceleration,
+                                     const std::array<double, 7>& lower_torque_nominal,
+                                     const std::array<double, 7>& upper_torque_nominal,
+                                     const std::array<double, 6>& lower_force_acceleration,
+                                     const std::array<double, 6>& upper_force_acceleration,
+                                     const std::array<double, 6>& lower_force_nominal,
+                                     const std::array<double, 6>& upper_force_nominal);
 
 // Robot::setJointImpedance default of libfranka's examples [N m/rad].
 Vector7 default_joint_stiffness();

@@ -17,6 +17,8 @@
 #include <optional>
 #include <string>
 
+#include "csp/rt/errors.hpp"
+
 namespace csp::fci {
 
 using Version = uint16_t;
@@ -248,6 +250,11 @@ struct GripperStatePacket {
 
 // The size of a gripper request message (header included); 0 for a code that is no command.
 std::size_t gripper_request_size(uint16_t command);
+
+// The robot state's 41 error flags (errors, reflex_reason) are in the research interface's own
+// order, which is not franka::Errors' field order (libfranka maps each field to its flag by name):
+// the flag of `error` is at wire_error_index(error).
+int wire_error_index(rt::Error error);
 
 // The size of a command packet in `version`.
 std::size_t robot_command_size(Version version);

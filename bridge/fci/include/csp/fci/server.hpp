@@ -63,6 +63,9 @@ class FciServer : public PortServer {
   // A UDP packet from the client: a command answering the current state, or it is counted and dropped.
   void receive_udp(const void* data, std::size_t size);
   bool in_motion() const { return motion_.has_value(); }
+  // A motion runs and its commands have begun: libfranka sends a motion's first command only after
+  // a state newer than the Move's, so until then a lockstep cycle has nothing to wait for.
+  bool commands_flowing() const { return motion_ && motion_->commanded; }
   bool answered() const { return command_.has_value(); }   // this cycle's command arrived
   // Ends the cycle: steps the robot with the command that answered the state, or none; answers
   // the Move request of a motion that ended.
@@ -78,6 +81,7 @@ class FciServer : public PortServer {
     MoveMotionGeneratorMode motion_generator = MoveMotionGeneratorMode::kJointPosition;
     MoveControllerMode controller = MoveControllerMode::kJointImpedance;
     rt::ControlMode mode = rt::ControlMode::kJointPosition;
+    bool commanded = false;   // a command of this motion has arrived
   };
 
   bool handle_message(const MessageHeader& header, const uint8_t* payload);
