@@ -5,6 +5,7 @@
 #               usr/lib/cmake/Franka, usr/lib/libfranka.so*) and no Conflicts: installs beside it;
 #   csp-franka  every file on those paths but no libfranka.so, Conflicts: libfranka, no Provides,
 #               Depends: csp of the same version.
+cmake_minimum_required(VERSION 3.25)   # IN_LIST
 file(REMOVE_RECURSE ${OUT})
 execute_process(COMMAND cpack -G DEB --config ${BUILD}/CPackConfig.cmake -B ${OUT} RESULT_VARIABLE result
                 OUTPUT_VARIABLE out ERROR_VARIABLE err)
