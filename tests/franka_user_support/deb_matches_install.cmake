@@ -5,6 +5,7 @@
 #               usr/lib/cmake/Franka, usr/lib/libfranka.so*) and no Conflicts: installs beside it;
 #   csp-franka  every file on those paths but no libfranka.so, Conflicts: libfranka, no Provides,
 #               Depends: csp of the same version.
+# Then dpkg itself unpacks them beside a stand-in libfranka package (below).
 cmake_minimum_required(VERSION 3.25)   # IN_LIST
 file(REMOVE_RECURSE ${OUT})
 execute_process(COMMAND cpack -G DEB --config ${BUILD}/CPackConfig.cmake -B ${OUT} RESULT_VARIABLE result
@@ -97,3 +98,44 @@ if(NOT packaged STREQUAL installed)
 endif()
 list(LENGTH packaged files)
 message(STATUS "csp and csp-franka: the same ${files} files as cmake --install")
+
+# What dpkg does with them beside libfranka: a stand-in package named libfranka with files on its
+# paths, unpacked into a dpkg database of its own (--root; --unpack runs no maintainer script).
+# csp unpacks beside it; csp-franka is refused for its Conflicts; alone, csp and csp-franka unpack.
+set(standin ${OUT}/libfranka_standin)
+foreach(file usr/include/franka/robot.h usr/include/research_interface/robot/rbk_types.h
+             usr/lib/cmake/Franka/FrankaConfig.cmake usr/lib/libfranka.so.0.15.0)
+  file(WRITE ${standin}/${file} "libfranka's\n")
+endforeach()
+file(WRITE ${standin}/DEBIAN/control "Package: libfranka\nVersion: 0.15.0-1\nArchitecture: all\n"
+     "Maintainer: CSP tests <csp@localhost>\nDescription: a stand-in with libfranka's file paths\n")
+execute_process(COMMAND dpkg-deb --root-owner-group -b ${standin} ${OUT}/libfranka_standin.deb
+                RESULT_VARIABLE result OUTPUT_QUIET ERROR_VARIABLE err)
+if(NOT result EQUAL 0)
+  message(FATAL_ERROR "dpkg-deb -b of the libfranka stand-in failed: ${err}")
+endif()
+# unpack(<root> <deb> <out var>): dpkg's exit code, then what it printed.
+function(unpack root deb out)
+  file(MAKE_DIRECTORY ${root}/var/lib/dpkg/info ${root}/var/lib/dpkg/updates)
+  file(TOUCH ${root}/var/lib/dpkg/status)
+  execute_process(COMMAND dpkg --root=${root} --force-not-root --log=/dev/null --unpack ${deb}
+                  RESULT_VARIABLE result OUTPUT_VARIABLE output ERROR_VARIABLE error)
+  set(${out} "${result}\n${output}${error}" PARENT_SCOPE)
+endfunction()
+file(GLOB csp_deb ${OUT}/csp_*.deb)
+file(GLOB csp_franka_deb ${OUT}/csp-franka_*.deb)
+unpack(${OUT}/beside ${OUT}/libfranka_standin.deb output)
+unpack(${OUT}/beside ${csp_deb} output)
+if(NOT output MATCHES "^0\n")
+  message(FATAL_ERROR "csp does not unpack beside libfranka:\n${output}")
+endif()
+unpack(${OUT}/beside ${csp_franka_deb} output)
+if(output MATCHES "^0\n" OR NOT output MATCHES "csp-franka conflicts with libfranka")
+  message(FATAL_ERROR "csp-franka beside libfranka: expected dpkg to refuse it for its Conflicts:\n${output}")
+endif()
+unpack(${OUT}/alone ${csp_deb} output)
+unpack(${OUT}/alone ${csp_franka_deb} output)
+if(NOT output MATCHES "^0\n" OR NOT EXISTS ${OUT}/alone/usr/lib/cmake/Franka/FrankaConfig.cmake)
+  message(FATAL_ERROR "csp-franka does not unpack after csp:\n${output}")
+endif()
+message(STATUS "dpkg: csp unpacks beside libfranka, csp-franka is refused there for its Conflicts")
