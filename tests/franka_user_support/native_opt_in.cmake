@@ -1,6 +1,7 @@
 # cmake -DSOURCE=<CSP source dir> -DOUT=<scratch dir> -P native_opt_in.cmake
 # CSP builds portable unless asked: configured with no options, no compile command carries
-# -march=native; configured with -DCSP_NATIVE=ON, `cmake --install` refuses before copying anything.
+# -march=native; configured with -DCSP_NATIVE=ON, `cmake --install` and `cpack` refuse before copying
+# anything.
 file(REMOVE_RECURSE ${OUT})
 foreach(variant default native)
   set(args -S ${SOURCE} -B ${OUT}/${variant} -G Ninja -DCSP_BUILD_TESTS=OFF -DCSP_BUILD_BENCHMARKS=OFF
@@ -32,4 +33,11 @@ endif()
 if(EXISTS ${OUT}/native_install)
   message(FATAL_ERROR "the refused install still wrote ${OUT}/native_install")
 endif()
-message(STATUS "default build portable; a -march=native build refuses to install")
+# cpack installs each package's component on its own: every one must refuse.
+execute_process(COMMAND cpack -G DEB --config ${OUT}/native/CPackConfig.cmake -B ${OUT}/native_packages
+                RESULT_VARIABLE result OUTPUT_VARIABLE out ERROR_VARIABLE err)
+file(GLOB debs ${OUT}/native_packages/*.deb)
+if(result EQUAL 0 OR debs OR NOT "${out}${err}" MATCHES "built with CSP_NATIVE=ON")
+  message(FATAL_ERROR "cpack of a CSP_NATIVE=ON build did not refuse by name (exit ${result}, packages [${debs}]):\n${out}${err}")
+endif()
+message(STATUS "default build portable; a -march=native build refuses to install and to package")
