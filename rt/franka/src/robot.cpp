@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -19,6 +20,7 @@
 #include "model_impl.hpp"
 #include "robot_address.hpp"
 #include "robot_impl.hpp"
+#include "robot_model_urdf.hpp"
 
 namespace franka {
 namespace {
@@ -209,7 +211,9 @@ void run_control(Robot::Impl& impl, const Callback<Motion>* motion, const Callba
 // Robot::Impl
 
 Robot::Impl::Impl(const csp::rt::Scenario& scenario, RealtimeConfig realtime_config, std::size_t log_size)
-    : emulator(scenario.emulator), log_(log_size) {
+    : emulator(scenario.emulator),
+      robot_name(scenario.robot_file.empty() ? "robot" : std::filesystem::path(scenario.robot_file).stem().string()),
+      log_(log_size) {
   if (log_size == 0) throw std::invalid_argument("libfranka: log_size must be at least 1");
   loop_options.clock = scenario.clock;
   loop_options.realtime_config = realtime_config == RealtimeConfig::kEnforce ? csp::rt::RealtimeConfig::kEnforce
@@ -473,6 +477,10 @@ CSP_FRANKA_START_CONTROL(startCartesianVelocityControl, CartesianVelocities)
 void Robot::stop() { impl_->stop_requested = true; }
 
 Model Robot::loadModel() { return Model(std::make_unique<Model::Impl>(impl_->emulator.internal_model())); }
+
+std::string Robot::getRobotModel() {
+  return csp::robot_model_urdf(impl_->emulator.internal_model().parameters(), impl_->robot_name);
+}
 
 Robot::ServerVersion Robot::serverVersion() const noexcept { return 9; }
 

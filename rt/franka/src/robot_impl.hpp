@@ -48,6 +48,7 @@ class Robot::Impl {
   RobotState read_once();
 
   csp::rt::Emulator emulator;
+  std::string robot_name;        // the robot file's name (panda, fr3): getRobotModel's prefix
   csp::rt::LoopOptions loop_options;
   csp::rt::TimingReport last_timing;
   csp::rt::CycleObserver user_observer;

@@ -129,6 +129,10 @@ class Robot {
   // The robot's model as it is now configured (end effector, load, K frame).
   Model loadModel();
 
+  // The arm's URDF (libfranka 0.15): the emulated arm's kinematics, link inertials and joint limits,
+  // links and joints named <robot>_link0..8, <robot>_joint1..8 (robot: panda or fr3).
+  std::string getRobotModel();
+
   ServerVersion serverVersion() const noexcept;
 
   Robot(const Robot&) = delete;
