@@ -55,7 +55,12 @@ struct SessionFigures {
   double motion_seconds = 0.0;     // wall time of the motion (session) cycles
   Percentiles round_trip_us;       // server side: state sent -> its command received
   std::optional<Percentiles> command_to_state_us;   // client side: command sent -> next state received
+  uint64_t stalls = 0;             // FCI lockstep: motion cycles that waited the whole lockstep timeout
+  double stall_seconds = 0.0;
   double cycles_per_second() const { return motion_seconds > 0.0 ? static_cast<double>(motion_cycles) / motion_seconds : 0.0; }
+  double cycles_per_second_without_stalls() const {
+    return motion_seconds > stall_seconds ? static_cast<double>(motion_cycles - stalls) / (motion_seconds - stall_seconds) : 0.0;
+  }
 };
 
 void print_round_trip(const char* what, const Percentiles& p) {
@@ -77,8 +82,13 @@ SessionFigures run_lcm_session(const char* title, Clock clock, double seconds, i
   csp::rt::Emulator robot(scenario.emulator);
   const csp::bridge::ServeReport r = csp::bridge::serve(robot, scenario, options);
   const int exit_code = controller.wait(10s);
-  SessionFigures figures{"LCM, csp_lcm_float", r.timing.cycles, r.emulator.motion_cycles, r.emulator.lost_commands,
-                         r.motion_wall_seconds, r.timing.round_trip_us, std::nullopt};
+  SessionFigures figures;
+  figures.name = "LCM, csp_lcm_float";
+  figures.cycles = r.timing.cycles;
+  figures.motion_cycles = r.emulator.motion_cycles;
+  figures.lost_commands = r.emulator.lost_commands;
+  figures.motion_seconds = r.motion_wall_seconds;
+  figures.round_trip_us = r.timing.round_trip_us;
   std::printf("%s: %llu cycles in %.3f s; session %llu cycles in %.3f s = %.0f cycles/s; lost commands %llu; overruns %llu\n",
               title, static_cast<unsigned long long>(r.timing.cycles), r.timing.wall_seconds,
               static_cast<unsigned long long>(figures.motion_cycles), figures.motion_seconds, figures.cycles_per_second(),
@@ -93,9 +103,10 @@ SessionFigures run_lcm_session(const char* title, Clock clock, double seconds, i
 
 // Serves the FR3 of configs/scenarios/libfranka_fr3.yaml over the FCI (version 7) on `address`
 // until `stop` is set, as `csp fci` does; `start_client` runs once the command port listens.
-// `motion_seconds`: the wall time of the cycles of a motion (FciServeReport has no such figure).
+// `figures`: the wall time of the cycles of a motion (FciServeReport has no such figure) and its
+// stalls, the cycles that waited for the whole lockstep timeout (a command that never came).
 csp::fci::FciServeReport serve_fr3(Clock clock, const std::string& address, const std::atomic<bool>& stop,
-                                   const std::function<void()>& start_client, double& motion_seconds) {
+                                   const std::function<void()>& start_client, SessionFigures& figures) {
   const csp::rt::Scenario scenario = csp::rt::load_scenario(CSP_SOURCE_DIR "/configs/scenarios/libfranka_fr3.yaml");
   csp::rt::Emulator robot(scenario.emulator);
   csp::fci::FciServeOptions options;
@@ -109,29 +120,39 @@ csp::fci::FciServeReport serve_fr3(Clock clock, const std::string& address, cons
   options.listening = start_client;
   options.diagnostic = [](const std::string& line) { std::printf("  (csp fci: %s)\n", line.c_str()); };
   int64_t previous_cycle_ns = csp::rt::monotonic_ns();
-  motion_seconds = 0.0;
   options.after_cycle = [&](const csp::rt::RobotState& state, const csp::rt::CycleInfo& cycle) {
     const int64_t now = csp::rt::monotonic_ns();
-    if (state.robot_mode == csp::rt::RobotMode::kMove || cycle.command_received)
-      motion_seconds += static_cast<double>(now - previous_cycle_ns) * 1e-9;
+    const double seconds = static_cast<double>(now - previous_cycle_ns) * 1e-9;
+    if (state.robot_mode == csp::rt::RobotMode::kMove || cycle.command_received) {
+      figures.motion_seconds += seconds;
+      if (clock == Clock::kLockstep && seconds >= options.lockstep_timeout) {
+        ++figures.stalls;
+        figures.stall_seconds += seconds;
+      }
+    }
     previous_cycle_ns = now;
   };
-  return csp::fci::serve_fci(robot, options);
+  const csp::fci::FciServeReport r = csp::fci::serve_fci(robot, options);
+  figures.cycles = r.timing.cycles;
+  figures.motion_cycles = r.emulator.motion_cycles;
+  figures.lost_commands = r.emulator.lost_commands;
+  figures.round_trip_us = r.timing.round_trip_us;
+  return r;
 }
 
-SessionFigures print_fci_session(const char* title, const csp::fci::FciServeReport& r, double motion_seconds) {
-  SessionFigures figures{"", r.timing.cycles, r.emulator.motion_cycles, r.emulator.lost_commands, motion_seconds,
-                         r.timing.round_trip_us, std::nullopt};
+void print_fci_session(const char* title, const csp::fci::FciServeReport& r, const SessionFigures& figures) {
   const csp::fci::FciCounters& c = r.counters;
   std::printf("%s: %llu cycles in %.3f s; %llu motions, %llu motion cycles in %.3f s = %.0f cycles/s; lost commands %llu; "
               "overruns %llu; stale %llu, rejected %llu command packets\n",
               title, static_cast<unsigned long long>(r.timing.cycles), r.timing.wall_seconds,
-              static_cast<unsigned long long>(c.motions), static_cast<unsigned long long>(figures.motion_cycles), motion_seconds,
+              static_cast<unsigned long long>(c.motions), static_cast<unsigned long long>(figures.motion_cycles), figures.motion_seconds,
               figures.cycles_per_second(), static_cast<unsigned long long>(figures.lost_commands),
               static_cast<unsigned long long>(r.timing.overruns), static_cast<unsigned long long>(c.stale_commands),
               static_cast<unsigned long long>(c.rejected_commands));
+  if (figures.stalls > 0)
+    std::printf("  %llu motion cycles waited the whole lockstep timeout (%.3f s); without them %.0f cycles/s\n",
+                static_cast<unsigned long long>(figures.stalls), figures.stall_seconds, figures.cycles_per_second_without_stalls());
   print_round_trip("round trip state -> command (server)", r.timing.round_trip_us);
-  return figures;
 }
 
 // libfranka 0.13.3's communication_test (a move to its start pose, then 10 s of zero torques) as
@@ -163,12 +184,12 @@ std::optional<SessionFigures> run_libfranka_session(const char* title, Clock clo
       stop = true;
     });
   };
-  double motion_seconds = 0.0;
-  const double self_cpu = cpu_seconds(RUSAGE_SELF), children_cpu = cpu_seconds(RUSAGE_CHILDREN);
-  const csp::fci::FciServeReport r = serve_fr3(clock, address, stop, start_client, motion_seconds);
-  if (watcher.joinable()) watcher.join();
-  SessionFigures figures = print_fci_session(title, r, motion_seconds);
+  SessionFigures figures;
   figures.name = "FCI, libfranka communication_test";
+  const double self_cpu = cpu_seconds(RUSAGE_SELF), children_cpu = cpu_seconds(RUSAGE_CHILDREN);
+  const csp::fci::FciServeReport r = serve_fr3(clock, address, stop, start_client, figures);
+  if (watcher.joinable()) watcher.join();
+  print_fci_session(title, r, figures);
   std::string success_rate = "no 'Avg:' line";
   std::ifstream lines(output);
   for (std::string line; std::getline(lines, line);)
@@ -224,21 +245,23 @@ class MinimalClient {
     request(Command::kMove, move);
     expect_status(Command::kMove, Status::kMotionStarted, 0);
 
+    // The motion runs from the newest state, whose id the server expects in the first command
+    // (it may have been sent before the Move, showing no motion yet).
+    csp::fci::RobotStatePacket state = receive_state();
+    for (pollfd p{udp_, POLLIN, 0}; ::poll(&p, 1, 0) == 1;) state = receive_state();
     csp::rt::DurationHistogram command_to_state_us;
-    std::optional<int64_t> command_sent_ns;
-    uint64_t answered = 0;
-    while (answered < cycles) {
-      const csp::fci::RobotStatePacket state = receive_state();
-      if (command_sent_ns) command_to_state_us.add(static_cast<double>(csp::rt::monotonic_ns() - *command_sent_ns) * 1e-3);
-      if (state.motion_generator_mode != static_cast<uint8_t>(csp::fci::StateMotionGeneratorMode::kJointPosition)) continue;
+    for (uint64_t answered = 1;; ++answered) {
       csp::fci::RobotCommandPacketV7 command{};
       command.message_id = state.message_id;
       command.motion.q_c = state.q_d;
-      command.motion.motion_generation_finished = ++answered == cycles ? 1 : 0;
+      command.motion.motion_generation_finished = answered == cycles ? 1 : 0;
       if (::sendto(udp_, &command, sizeof(command), 0, reinterpret_cast<const sockaddr*>(&robot_udp_), sizeof(robot_udp_)) !=
           static_cast<ssize_t>(sizeof(command)))
         fail("UDP send");
-      command_sent_ns = csp::rt::monotonic_ns();
+      if (answered == cycles) break;
+      const int64_t command_sent_ns = csp::rt::monotonic_ns();
+      state = receive_state();
+      command_to_state_us.add(static_cast<double>(csp::rt::monotonic_ns() - command_sent_ns) * 1e-3);
     }
     expect_status(Command::kMove, Status::kSuccess, 0);   // the motion's end
     return command_to_state_us.percentiles();
@@ -314,13 +337,13 @@ SessionFigures run_minimal_client_session(const char* title, Clock clock, const 
       stop = true;
     });
   };
-  double motion_seconds = 0.0;
-  const double self_cpu = cpu_seconds(RUSAGE_SELF);
-  const csp::fci::FciServeReport r = serve_fr3(clock, address, stop, start_client, motion_seconds);
-  if (client.joinable()) client.join();
-  SessionFigures figures = print_fci_session(title, r, motion_seconds);
+  SessionFigures figures;
   figures.name = "FCI, minimal client";
+  const double self_cpu = cpu_seconds(RUSAGE_SELF);
+  const csp::fci::FciServeReport r = serve_fr3(clock, address, stop, start_client, figures);
+  if (client.joinable()) client.join();
   figures.command_to_state_us = command_to_state_us;
+  print_fci_session(title, r, figures);
   if (command_to_state_us) print_round_trip("command sent -> next state received (client)", *command_to_state_us);
   if (!failure.empty()) std::printf("  FAILED: %s\n", failure.c_str());
   std::printf("  CPU: server and client (one process) %.3f s\n", cpu_seconds(RUSAGE_SELF) - self_cpu);
@@ -333,12 +356,13 @@ double ratio(double fci, double lcm) { return lcm > 0.0 ? fci / lcm : 0.0; }
 
 void print_table(const char* clock, const std::vector<SessionFigures>& sessions) {
   const SessionFigures& lcm = sessions.front();
-  std::printf("\n%s clock | motion cycles | cycles/s | lost | round trip p50 / p99 / p99.9 / max [us] | "
+  std::printf("\n%s clock | motion cycles | cycles/s (without stalls) | lost | round trip p50 / p99 / p99.9 / max [us] | "
               "command -> next state p50 / p99 / p99.9 [us] | FCI/LCM: cycles/s, p50, p99, p99.9\n",
               clock);
   for (const SessionFigures& s : sessions) {
-    std::printf("%s | %llu | %.0f | %llu | %.1f / %.1f / %.1f / %.1f | ", s.name.c_str(),
-                static_cast<unsigned long long>(s.motion_cycles), s.cycles_per_second(),
+    std::printf("%s | %llu | %.0f", s.name.c_str(), static_cast<unsigned long long>(s.motion_cycles), s.cycles_per_second());
+    if (s.stalls > 0) std::printf(" (%.0f)", s.cycles_per_second_without_stalls());
+    std::printf(" | %llu | %.1f / %.1f / %.1f / %.1f | ",
                 static_cast<unsigned long long>(s.lost_commands), s.round_trip_us.p50, s.round_trip_us.p99,
                 s.round_trip_us.p999, s.round_trip_us.max);
     if (s.command_to_state_us)
