@@ -340,8 +340,8 @@ TEST(CSP_FCI_SUITE, TheRobotCommandHasLibfrankasLayout) {
   EXPECT_EQ(got->motion.O_T_EE_c[12], 0.42);
   EXPECT_EQ(got->motion.O_dP_EE_c[5], -0.3);
   EXPECT_EQ(got->motion.elbow_c[1], -1.0);
-  EXPECT_EQ(got->motion.valid_elbow, 1);
-  EXPECT_EQ(got->motion.motion_generation_finished, 1);
+  EXPECT_TRUE(got->motion.valid_elbow);
+  EXPECT_TRUE(got->motion.motion_generation_finished);
   EXPECT_EQ(got->torque_command_finished, 0);
   EXPECT_FALSE(fci::decode_robot_command(&sent, sizeof(sent) - 1, kVersion));
 }

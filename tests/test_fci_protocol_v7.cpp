@@ -8,10 +8,10 @@
 
 // libfranka 0.13.3's headers in a namespace of their own: the other version's test declares the same names.
 namespace vendor_v7 {
-#include <research_interface/robot/error.h>
-#include <research_interface/robot/rbk_types.h>
-#include <research_interface/robot/service_types.h>
-#include <research_interface/gripper/types.h>
+#include <include/research_interface/robot/error.h>
+#include <include/research_interface/robot/rbk_types.h>
+#include <include/research_interface/robot/service_types.h>
+#include <include/research_interface/gripper/types.h>
 }  // namespace vendor_v7
 
 #define CSP_FCI_VERSION 7

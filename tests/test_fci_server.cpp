@@ -117,7 +117,7 @@ fci::MoveRequest move(fci::MoveMotionGeneratorMode generator, fci::MoveControlle
 fci::RobotCommandPacketV7 hold(const fci::RobotStatePacket& state, bool finished = false) {
   fci::RobotCommandPacketV7 command{};
   command.motion.q_c = state.q_d;
-  command.motion.motion_generation_finished = finished ? 1 : 0;
+  command.motion.motion_generation_finished = finished;
   return command;
 }
 
@@ -196,9 +196,9 @@ TEST(FciServer, AMotionRunsAndItsMoveIsAnsweredWhenItFinishes) {
     Client client(version);
     ASSERT_TRUE(client.connect(version));
     const fci::RobotStatePacket idle = client.server().state_packet();
-    EXPECT_EQ(idle.motion_generator_mode, static_cast<uint8_t>(fci::StateMotionGeneratorMode::kIdle));
-    EXPECT_EQ(idle.controller_mode, static_cast<uint8_t>(fci::StateControllerMode::kOther));
-    EXPECT_EQ(idle.robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kIdle));
+    EXPECT_EQ(idle.motion_generator_mode, fci::StateMotionGeneratorMode::kIdle);
+    EXPECT_EQ(idle.controller_mode, fci::StateControllerMode::kOther);
+    EXPECT_EQ(idle.robot_mode, fci::StateRobotMode::kIdle);
 
     ASSERT_TRUE(client.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointPosition, fci::MoveControllerMode::kJointImpedance)));
     const uint32_t move_id = client.last_id();
@@ -209,9 +209,9 @@ TEST(FciServer, AMotionRunsAndItsMoveIsAnsweredWhenItFinishes) {
     // The state shows the motion as libfranka's startMotion waits for it.
     client.cycle_without_command();
     const fci::RobotStatePacket moving = client.server().state_packet();
-    EXPECT_EQ(moving.motion_generator_mode, static_cast<uint8_t>(fci::StateMotionGeneratorMode::kJointPosition));
-    EXPECT_EQ(moving.controller_mode, static_cast<uint8_t>(fci::StateControllerMode::kJointImpedance));
-    EXPECT_EQ(moving.robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kMove));
+    EXPECT_EQ(moving.motion_generator_mode, fci::StateMotionGeneratorMode::kJointPosition);
+    EXPECT_EQ(moving.controller_mode, fci::StateControllerMode::kJointImpedance);
+    EXPECT_EQ(moving.robot_mode, fci::StateRobotMode::kMove);
     EXPECT_EQ(moving.message_id, idle.message_id + 1);
 
     for (int k = 0; k < 50; ++k) client.cycle(hold(client.server().state_packet()));
@@ -223,7 +223,7 @@ TEST(FciServer, AMotionRunsAndItsMoveIsAnsweredWhenItFinishes) {
     EXPECT_EQ(done.header.command_id, move_id);
     EXPECT_EQ(done.status, client.code(Command::kMove, Status::kSuccess));
     EXPECT_FALSE(client.server().in_motion());
-    EXPECT_EQ(client.server().state_packet().motion_generator_mode, static_cast<uint8_t>(fci::StateMotionGeneratorMode::kIdle));
+    EXPECT_EQ(client.server().state_packet().motion_generator_mode, fci::StateMotionGeneratorMode::kIdle);
   }
 }
 
@@ -239,10 +239,10 @@ TEST(FciServer, AReflexAbortsTheMoveAndShowsItsErrorUntilRecovery) {
     ASSERT_EQ(client.replies.size(), 3u);
     EXPECT_EQ(client.reply(2).status, client.code(Command::kMove, Status::kReflexAborted));
     const fci::RobotStatePacket reflex = client.server().state_packet();
-    EXPECT_EQ(reflex.robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kReflex));
+    EXPECT_EQ(reflex.robot_mode, fci::StateRobotMode::kReflex);
     const int velocity = fci::wire_error_index(rt::Error::joint_motion_generator_velocity_limits_violation);
-    EXPECT_EQ(reflex.reflex_reason[velocity], 1);
-    EXPECT_EQ(reflex.errors[velocity], 1);
+    EXPECT_TRUE(reflex.reflex_reason[velocity]);
+    EXPECT_TRUE(reflex.errors[velocity]);
 
     // A Move in Reflex mode is refused; recovery clears the errors and the next motion starts.
     ASSERT_TRUE(client.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointVelocity, fci::MoveControllerMode::kJointImpedance)));
@@ -252,9 +252,9 @@ TEST(FciServer, AReflexAbortsTheMoveAndShowsItsErrorUntilRecovery) {
     EXPECT_EQ(client.reply(4).status, 0);
     client.cycle_without_command();
     const fci::RobotStatePacket recovered = client.server().state_packet();
-    EXPECT_EQ(recovered.robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kIdle));
-    EXPECT_EQ(recovered.errors[velocity], 0);
-    EXPECT_EQ(recovered.reflex_reason[velocity], 1) << "the last motion's errors stay, as on the robot";
+    EXPECT_EQ(recovered.robot_mode, fci::StateRobotMode::kIdle);
+    EXPECT_FALSE(recovered.errors[velocity]);
+    EXPECT_TRUE(recovered.reflex_reason[velocity]) << "the last motion's errors stay, as on the robot";
     ASSERT_TRUE(client.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointPosition, fci::MoveControllerMode::kJointImpedance)));
     EXPECT_EQ(client.replies.size(), 6u);
     EXPECT_EQ(client.reply(5).status, client.code(Command::kMove, Status::kMotionStarted));
@@ -272,14 +272,14 @@ TEST(FciServer, AClientThatVanishesMidMotionEndsItAsTheRobotWould) {
   for (int k = 0; k < 30 && client.server().in_motion(); ++k) client.cycle_without_command();
   EXPECT_FALSE(client.server().in_motion());
   const fci::RobotStatePacket state = client.server().state_packet();
-  EXPECT_EQ(state.robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kReflex));
-  EXPECT_EQ(state.reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)], 1);
+  EXPECT_EQ(state.robot_mode, fci::StateRobotMode::kReflex);
+  EXPECT_TRUE(state.reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)]);
   EXPECT_EQ(client.replies.size(), 2u) << "no answer goes to a client that has gone";
 
   // The robot outlives its client: the next one finds it where it stopped, in Reflex mode.
   client.server().open_connection([&](const std::vector<uint8_t>& bytes) { client.replies.push_back(bytes); });
   ASSERT_TRUE(client.connect(fci::kFr3Version));
-  EXPECT_EQ(client.server().state_packet().robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kReflex));
+  EXPECT_EQ(client.server().state_packet().robot_mode, fci::StateRobotMode::kReflex);
   EXPECT_EQ(client.server().state_packet().message_id, state.message_id);
 }
 
@@ -329,7 +329,7 @@ TEST(FciServer, TheScenariosFaultsLoseCommandsOnTheWay) {
   }
   EXPECT_EQ(cycles, 30);
   EXPECT_EQ(bursty.server().counters().injected_losses, 20u);
-  EXPECT_EQ(bursty.server().state_packet().reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)], 1);
+  EXPECT_TRUE(bursty.server().state_packet().reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)]);
 }
 
 TEST(FciServer, SettingsAreAppliedBetweenMotionsAndRefusedWithTheRobotsStatus) {
@@ -371,7 +371,7 @@ TEST(FciServer, StopMoveEndsTheMotionAndPreemptsItsMove) {
   EXPECT_EQ(client.reply(4).header.command_id, move_id);
   EXPECT_EQ(client.reply(4).status, client.code(Command::kMove, Status::kPreempted));
   client.cycle_without_command();
-  EXPECT_EQ(client.server().state_packet().robot_mode, static_cast<uint8_t>(fci::StateRobotMode::kIdle));
+  EXPECT_EQ(client.server().state_packet().robot_mode, fci::StateRobotMode::kIdle);
 }
 
 TEST(FciServer, TorqueControlIsAZeroVelocityMotionUnderTheExternalController) {
@@ -385,11 +385,11 @@ TEST(FciServer, TorqueControlIsAZeroVelocityMotionUnderTheExternalController) {
     torque.tau_J_d = {0, 0, 0, 0, 0, 0, 0.5};
     for (int k = 0; k < 20; ++k) client.cycle(torque);
     const fci::RobotStatePacket state = client.server().state_packet();
-    EXPECT_EQ(state.controller_mode, static_cast<uint8_t>(fci::StateControllerMode::kExternalController));
+    EXPECT_EQ(state.controller_mode, fci::StateControllerMode::kExternalController);
     EXPECT_EQ(state.tau_J_d[6], 0.5);
     EXPECT_GT(state.dq[6], 0.0) << "the user's torque drives joint 7";
     if (generator == fci::MoveMotionGeneratorMode::kNone) torque.torque_command_finished = 1;
-    else torque.motion.motion_generation_finished = 1;
+    else torque.motion.motion_generation_finished = true;
     client.cycle(torque);
     EXPECT_EQ(client.reply(2).status, 0);
   }

@@ -24,7 +24,7 @@ import shlex
 import subprocess
 import sys
 
-from run_example import CheckFailed, Server
+from run_example import CheckFailed, Server, against_server
 
 TOLERANCE = 1e-9
 PROGRAM_TIME_LIMIT_S = 60.0
@@ -221,29 +221,11 @@ def main():
     server_command = [options.csp, "fci", options.scenario, "--address", options.address]
     if options.clock:
         server_command += ["--clock", options.clock]
-    server = None
-    failure = None
-    try:
-        print("$ " + shlex.join(server_command), flush=True)
-        server = Server(server_command)
-        server.wait_until_listening()
+    def run(server):
         CHECKS[options.check](options, server)
         server.stop()
-    except CheckFailed as error:
-        failure = error
-    finally:
-        if server is not None:
-            if server.process.poll() is None:
-                server.process.kill()
-                server.process.wait()
-            server.reader.join(1.0)
-            print(f"--- csp fci's output:\n{server.output()}", end="", flush=True)
-    if failure:
-        print(f"FAILED: {failure}", flush=True)
-        return 1
-    print(f"PASSED: {options.check} against csp fci at {options.address}")
-    return 0
 
+    return against_server(server_command, run, options.check, options.address)
 
 if __name__ == "__main__":
     sys.exit(main())

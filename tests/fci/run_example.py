@@ -244,14 +244,9 @@ def main():
     if options.clock:
         server_command += ["--clock", options.clock]
 
-    server = None
-    failure = None
-    try:
+    def run(server):
         initial_q = scenario_initial_q(options.scenario)
         with tempfile.TemporaryDirectory(prefix="csp_fci_sys_kernel_") as fake_sys_kernel:
-            print("$ " + shlex.join(server_command), flush=True)
-            server = Server(server_command)
-            server.wait_until_listening()
             command = example_command(options.example, options.address, options.arguments,
                                       options.realtime_kernel, fake_sys_kernel)
             print("$ " + shlex.join(command), flush=True)
@@ -273,6 +268,21 @@ def main():
         if code != expected_code:
             raise CheckFailed(f"{name} ended with exit code {code}, expected {expected_code}")
         check(output, initial_q)
+
+    return against_server(server_command, run, name, options.address)
+
+
+def against_server(server_command, run, what, address):
+    """Starts csp fci, and once it listens runs `run(server)` (which stops it, or raises
+    CheckFailed); prints both programs' output and one PASSED or FAILED line. Returns the exit
+    status, 0 or 1. Also run_client.py's."""
+    server = None
+    failure = None
+    try:
+        print("$ " + shlex.join(server_command), flush=True)
+        server = Server(server_command)
+        server.wait_until_listening()
+        run(server)
     except CheckFailed as error:
         failure = error
     finally:
@@ -285,9 +295,8 @@ def main():
     if failure:
         print(f"FAILED: {failure}", flush=True)
         return 1
-    print(f"PASSED: {name} against csp fci at {options.address}")
+    print(f"PASSED: {what} against csp fci at {address}")
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())

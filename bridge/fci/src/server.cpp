@@ -52,24 +52,24 @@ rt::ControllerMode controller_of(MoveControllerMode controller) {
   return rt::ControllerMode::kJointImpedance;
 }
 
-uint8_t robot_mode_code(rt::RobotMode mode) {
+StateRobotMode robot_mode_code(rt::RobotMode mode) {
   switch (mode) {
-    case rt::RobotMode::kOther: return static_cast<uint8_t>(StateRobotMode::kOther);
-    case rt::RobotMode::kIdle: return static_cast<uint8_t>(StateRobotMode::kIdle);
-    case rt::RobotMode::kMove: return static_cast<uint8_t>(StateRobotMode::kMove);
-    case rt::RobotMode::kGuiding: return static_cast<uint8_t>(StateRobotMode::kGuiding);
-    case rt::RobotMode::kReflex: return static_cast<uint8_t>(StateRobotMode::kReflex);
-    case rt::RobotMode::kUserStopped: return static_cast<uint8_t>(StateRobotMode::kUserStopped);
-    case rt::RobotMode::kAutomaticErrorRecovery: return static_cast<uint8_t>(StateRobotMode::kAutomaticErrorRecovery);
+    case rt::RobotMode::kOther: return StateRobotMode::kOther;
+    case rt::RobotMode::kIdle: return StateRobotMode::kIdle;
+    case rt::RobotMode::kMove: return StateRobotMode::kMove;
+    case rt::RobotMode::kGuiding: return StateRobotMode::kGuiding;
+    case rt::RobotMode::kReflex: return StateRobotMode::kReflex;
+    case rt::RobotMode::kUserStopped: return StateRobotMode::kUserStopped;
+    case rt::RobotMode::kAutomaticErrorRecovery: return StateRobotMode::kAutomaticErrorRecovery;
   }
-  return static_cast<uint8_t>(StateRobotMode::kOther);
+  return StateRobotMode::kOther;
 }
 
-std::array<uint8_t, 41> error_flags(const franka::Errors& errors) {
+std::array<bool, 41> error_flags(const franka::Errors& errors) {
   const rt::ErrorSet set(errors);
-  std::array<uint8_t, 41> bytes{};
-  for (int i = 0; i < rt::kNumErrors; ++i) bytes[wire_error_index(static_cast<rt::Error>(i))] = set.flags()[i] ? 1 : 0;
-  return bytes;
+  std::array<bool, 41> flags{};
+  for (int i = 0; i < rt::kNumErrors; ++i) flags[wire_error_index(static_cast<rt::Error>(i))] = set.flags()[i];
+  return flags;
 }
 
 // A pose received in a request: a finite rigid transform, else the request is an invalid argument.
@@ -343,9 +343,9 @@ RobotStatePacket FciServer::state_packet() const {
   p.dtheta = s.dtheta;
   // The state's mode codes: the Move's motion generator one higher (0 is Idle), its controller as
   // requested; without a motion no controller of the user's choice runs (kOther).
-  p.motion_generator_mode = motion_ ? static_cast<uint8_t>(static_cast<uint32_t>(motion_->motion_generator) + 1)
-                                    : static_cast<uint8_t>(StateMotionGeneratorMode::kIdle);
-  p.controller_mode = motion_ ? static_cast<uint8_t>(motion_->controller) : static_cast<uint8_t>(StateControllerMode::kOther);
+  p.motion_generator_mode = motion_ ? static_cast<StateMotionGeneratorMode>(static_cast<uint32_t>(motion_->motion_generator) + 1)
+                                    : StateMotionGeneratorMode::kIdle;
+  p.controller_mode = motion_ ? static_cast<StateControllerMode>(motion_->controller) : StateControllerMode::kOther;
   p.errors = error_flags(s.current_errors);
   p.reflex_reason = error_flags(s.last_motion_errors);
   p.robot_mode = robot_mode_code(s.robot_mode);
@@ -378,7 +378,7 @@ void FciServer::receive_udp(const void* data, std::size_t size) {
   if (rt::is_cartesian(motion_->mode) && m.valid_elbow) command.elbow = m.elbow_c;
   if (motion_->controller == MoveControllerMode::kExternalController) command.torque = from_array<Vector7>(packet->tau_J_d);
   command.motion_finished = motion_->mode == rt::ControlMode::kTorque ? packet->torque_command_finished != 0
-                                                                       : m.motion_generation_finished != 0;
+                                                                       : m.motion_generation_finished;
   command_ = command;
   motion_->commanded = true;
 }

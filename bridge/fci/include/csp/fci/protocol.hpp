@@ -18,6 +18,7 @@
 #include <string>
 
 #include "csp/rt/errors.hpp"
+#include "research_interface/robot/rbk_types.h"
 
 namespace csp::fci {
 
@@ -151,50 +152,20 @@ struct StatusResponse {
   uint8_t status = 0;
 };
 
-// The UDP robot state (one a millisecond). motion_generator_mode and controller_mode use the
-// state's own codes, not the Move request's.
-enum class StateMotionGeneratorMode : uint8_t { kIdle, kJointPosition, kJointVelocity, kCartesianPosition, kCartesianVelocity, kNone };
-enum class StateControllerMode : uint8_t { kJointImpedance, kCartesianImpedance, kExternalController, kOther };
-enum class StateRobotMode : uint8_t { kOther, kIdle, kMove, kGuiding, kReflex, kUserStopped, kAutomaticErrorRecovery };
+#pragma pack(pop)
 
-struct RobotStatePacket {
-  uint64_t message_id;
-  std::array<double, 16> O_T_EE, O_T_EE_d, F_T_EE, EE_T_K, F_T_NE, NE_T_EE;
-  double m_ee;
-  std::array<double, 9> I_ee;
-  std::array<double, 3> F_x_Cee;
-  double m_load;
-  std::array<double, 9> I_load;
-  std::array<double, 3> F_x_Cload;
-  std::array<double, 2> elbow, elbow_d;
-  std::array<double, 7> tau_J, tau_J_d, dtau_J, q, q_d, dq, dq_d, ddq_d, joint_contact;
-  std::array<double, 6> cartesian_contact;
-  std::array<double, 7> joint_collision;
-  std::array<double, 6> cartesian_collision;
-  std::array<double, 7> tau_ext_hat_filtered;
-  std::array<double, 6> O_F_ext_hat_K, K_F_ext_hat_K, O_dP_EE_d;
-  std::array<double, 3> O_ddP_O;
-  std::array<double, 2> elbow_c, delbow_c, ddelbow_c;
-  std::array<double, 16> O_T_EE_c;
-  std::array<double, 6> O_dP_EE_c, O_ddP_EE_c;
-  std::array<double, 7> theta, dtheta;
-  uint8_t motion_generator_mode;   // StateMotionGeneratorMode
-  uint8_t controller_mode;         // StateControllerMode
-  std::array<uint8_t, 41> errors;          // bools, in franka::Errors' order
-  std::array<uint8_t, 41> reflex_reason;   // the last motion's errors
-  uint8_t robot_mode;              // StateRobotMode
-  double control_command_success_rate;
-};
+// The UDP robot state (one a millisecond) and the motion part of the command answering it: the same
+// in both versions, and the same declarations programs written for libfranka include
+// (rt/franka's research_interface/robot/rbk_types.h, one home for the layout). The state's mode
+// codes are its own, not the Move request's.
+using RobotStatePacket = research_interface::robot::RobotState;
+using MotionGeneratorCommandPacket = research_interface::robot::MotionGeneratorCommand;
+using StateMotionGeneratorMode = research_interface::robot::MotionGeneratorMode;
+using StateControllerMode = research_interface::robot::ControllerMode;
+using StateRobotMode = research_interface::robot::RobotMode;
 
+#pragma pack(push, 1)
 // The UDP command answering a state (its message_id).
-struct MotionGeneratorCommandPacket {
-  std::array<double, 7> q_c, dq_c;
-  std::array<double, 16> O_T_EE_c;
-  std::array<double, 6> O_dP_EE_c;
-  std::array<double, 2> elbow_c;
-  uint8_t valid_elbow;
-  uint8_t motion_generation_finished;
-};
 struct RobotCommandPacketV5 {
   uint64_t message_id;
   MotionGeneratorCommandPacket motion;

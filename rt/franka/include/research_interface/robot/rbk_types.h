@@ -3,7 +3,7 @@
 // franka_hardware. CSP's franka::Robot does not send them (it has no network); they are here so that
 // such programs build unchanged, and they have the robot's layout: packed, every field in the
 // robot's order, as in the two FCI versions `csp fci` serves. CSP_FRANKA_API_VERSION chooses one:
-// 1500 gives version 7's (libfranka 0.10-0.13: doubles throughout), 900 version 5's (libfranka 0.9:
+// 1500 gives version 7's (libfranka 0.13: doubles throughout), 900 version 5's (libfranka 0.9:
 // no MotionGeneratorMode::kNone, no torque_command_finished). Newer robots send the state's values
 // as floats (docs/franka_api.md).
 #pragma once
@@ -56,7 +56,7 @@ struct RobotState {
   std::array<double, 7> theta, dtheta;
   MotionGeneratorMode motion_generator_mode;
   ControllerMode controller_mode;
-  std::array<bool, 41> errors;          // in franka::Errors' order
+  std::array<bool, 41> errors;          // in the research interface's Error order (not franka::Errors' fields')
   std::array<bool, 41> reflex_reason;   // the errors that ended the last motion
   RobotMode robot_mode;
   double control_command_success_rate;
