@@ -49,13 +49,15 @@ int run_fci(const FciArguments& args) {
   options.duration = args.scenario.duration;
   options.faults = scenario.command_faults;
   if (scenario.has_hand) options.hand = scenario.hand;
+  if (scenario.has_vacuum_gripper) options.vacuum_gripper = scenario.vacuum_gripper;
   // The robot's own model, as the robot serves its model library (read when a client asks).
   options.model_library = [&run] { return fci::model_library_for(run.emulator().internal_model().parameters()); };
   options.diagnostic = [](const std::string& line) { std::cerr << "csp fci: " << line << '\n'; };
   options.listening = [&] {
     std::printf("csp fci: %s (%s), FCI version %d (libfranka %s), %s clock, listening on %s:%d%s\n", scenario.name.c_str(),
                 scenario.path.c_str(), options.version, options.version == fci::kFr3Version ? "0.13" : "0.9",
-                rt::clock_name(options.clock), args.address.c_str(), fci::kCommandPort, options.hand ? " (the hand on 1338)" : "");
+                rt::clock_name(options.clock), args.address.c_str(), fci::kCommandPort,
+                options.hand ? " (the hand on 1338)" : options.vacuum_gripper ? " (the vacuum gripper on 1339)" : "");
     std::fflush(stdout);
   };
   run::FciSource network(options);
@@ -78,11 +80,15 @@ int run_fci(const FciArguments& args) {
               static_cast<unsigned long long>(c.rejected_commands), static_cast<unsigned long long>(c.stale_commands),
               static_cast<unsigned long long>(r.foreign_packets), static_cast<unsigned long long>(c.client_losses),
               static_cast<unsigned long long>(c.injected_losses));
-  if (r.gripper)
-    std::printf("  gripper: connections %llu (refused versions %llu), commands %llu, failed %llu, protocol errors %llu\n",
-                static_cast<unsigned long long>(r.gripper->connections), static_cast<unsigned long long>(r.gripper->refused_versions),
-                static_cast<unsigned long long>(r.gripper->commands), static_cast<unsigned long long>(r.gripper->failed_commands),
-                static_cast<unsigned long long>(r.gripper->protocol_errors));
+  const auto print_device = [](const char* name, const std::optional<fci::DeviceCounters>& d) {
+    if (!d) return;
+    std::printf("  %s: connections %llu (refused versions %llu), commands %llu, failed %llu, protocol errors %llu\n", name,
+                static_cast<unsigned long long>(d->connections), static_cast<unsigned long long>(d->refused_versions),
+                static_cast<unsigned long long>(d->commands), static_cast<unsigned long long>(d->failed_commands),
+                static_cast<unsigned long long>(d->protocol_errors));
+  };
+  print_device("gripper", r.gripper);
+  print_device("vacuum gripper", r.vacuum_gripper);
   if (!r.last_reflex.empty()) std::printf("  last reflex: %s\n", r.last_reflex.c_str());
   if (csv) std::printf("  CSV log: %s (%llu rows)\n", args.csv.c_str(), static_cast<unsigned long long>(csv->log().rows()));
   // A signal is how the robot is switched off: exit status 0.

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "csp/fci/gripper_server.hpp"
+#include "csp/fci/device_server.hpp"
 #include "csp/fci/server.hpp"
 #include "csp/rt/scenario.hpp"
 
@@ -436,19 +436,21 @@ TEST(FciServer, TheStatePacketIsTheRobotsState) {
 
 namespace {
 
-class HandClient {
+// A client of one device's server (the hand's or the pump's), on a scenario that has the device.
+template <typename Device, typename StatePacket>
+class DeviceClient {
  public:
-  HandClient()
-      : scenario_(rt::load_scenario(rt::shipped_scenario_path("libfranka_fr3"))),
+  DeviceClient(const std::string& scenario, Device device)
+      : scenario_(rt::load_scenario(rt::shipped_scenario_path(scenario))),
         robot_(scenario_.emulator),
-        server_(robot_, scenario_.hand, [this](const std::string& line) { lines.push_back(line); }) {
+        server_(robot_, std::move(device), [this](const std::string& line) { lines.push_back(line); }) {
     server_.open_connection([this](const std::vector<uint8_t>& bytes) { replies.push_back(bytes); });
   }
 
   template <typename Payload>
-  bool send(fci::GripperCommand command, const Payload* payload, std::size_t payload_size) {
+  bool send(uint16_t command, const Payload* payload, std::size_t payload_size) {
     fci::GripperMessageHeader header;
-    header.command = static_cast<uint16_t>(command);
+    header.command = command;
     header.command_id = next_id_++;
     header.size = static_cast<uint32_t>(sizeof(header) + payload_size);
     std::vector<uint8_t> bytes(header.size);
@@ -458,7 +460,7 @@ class HandClient {
   }
   bool connect(uint16_t version) {
     const fci::GripperConnectRequest request{version, 50000};
-    return send(fci::GripperCommand::kConnect, &request, sizeof(request));
+    return send(0, &request, sizeof(request));
   }
   uint16_t status(std::size_t k) const {
     uint16_t s = 0;
@@ -471,25 +473,44 @@ class HandClient {
     return h.command_id;
   }
   // Robot cycles until a reply arrives (at most `seconds`); the state messages seen meanwhile.
-  std::vector<fci::GripperStatePacket> run_until_reply(double seconds) {
-    std::vector<fci::GripperStatePacket> states;
+  std::vector<StatePacket> run_until_reply(double seconds) {
+    std::vector<StatePacket> states;
     const std::size_t before = replies.size();
     for (int k = 0; k < static_cast<int>(seconds * 1000) && replies.size() == before; ++k) {
       robot_.step(nullptr);
-      if (const auto state = server_.step()) states.push_back(*state);
+      if (const auto bytes = server_.step()) {
+        EXPECT_EQ(bytes->size(), sizeof(StatePacket));
+        StatePacket state;
+        std::memcpy(&state, bytes->data(), sizeof(state));
+        states.push_back(state);
+      }
     }
     return states;
   }
 
-  fci::GripperServer& server() { return server_; }
+  fci::DeviceServer<Device>& server() { return server_; }
+  const rt::Emulator& robot() const { return robot_; }
   std::vector<std::vector<uint8_t>> replies;
   std::vector<std::string> lines;
 
  private:
   rt::Scenario scenario_;
   rt::Emulator robot_;
-  fci::GripperServer server_;
+  fci::DeviceServer<Device> server_;
   uint32_t next_id_ = 0;
+};
+
+// The hand of libfranka_fr3: a 30 mm object stands between the fingers.
+class HandClient : public DeviceClient<rt::Hand, fci::GripperStatePacket> {
+ public:
+  HandClient() : DeviceClient("libfranka_fr3", rt::Hand(rt::load_scenario(rt::shipped_scenario_path("libfranka_fr3")).hand)) {}
+  bool send(fci::GripperCommand command, const void* payload, std::size_t size) {
+    return DeviceClient::send(static_cast<uint16_t>(command), static_cast<const uint8_t*>(payload), size);
+  }
+  template <typename Payload>
+  bool send(fci::GripperCommand command, const Payload* payload, std::size_t size) {
+    return send(command, static_cast<const void*>(payload), size);
+  }
 };
 
 TEST(FciGripperServer, ConnectsAtVersion3AndRefusesAnother) {
@@ -515,14 +536,14 @@ TEST(FciGripperServer, ACommandIsAnsweredWhenTheFingersArrive) {
   EXPECT_EQ(client.command_id(1), 1u);
   ASSERT_GE(states.size(), 4u) << "a state message about every 100 ms";
   EXPECT_LT(states.back().width, states.front().width);
-  EXPECT_NEAR(client.server().hand().state().width, 0.04, 1e-9);
+  EXPECT_NEAR(client.server().device().state().width, 0.04, 1e-9);
   // A move through the object stops at it: unsuccessful, as libfranka's move() returning false.
   const fci::GripperMoveRequest through{0.02, 0.1};
   ASSERT_TRUE(client.send(fci::GripperCommand::kMove, &through, sizeof(through)));
   client.run_until_reply(2.0);
   ASSERT_EQ(client.replies.size(), 3u);
   EXPECT_EQ(client.status(2), static_cast<uint16_t>(fci::GripperStatus::kUnsuccessful));
-  EXPECT_NEAR(client.server().hand().state().width, 0.03, 1e-9);
+  EXPECT_NEAR(client.server().device().state().width, 0.03, 1e-9);
 }
 
 TEST(FciGripperServer, ACommandTheHandRefusesFailsAtOnceAndTheConnectionStays) {
@@ -548,7 +569,7 @@ TEST(FciGripperServer, StopAbortsTheRunningCommand) {
   const fci::GripperMoveRequest move{0.0, 0.01};
   ASSERT_TRUE(client.send(fci::GripperCommand::kMove, &move, sizeof(move)));
   client.run_until_reply(0.3);
-  ASSERT_TRUE(client.send<uint8_t>(fci::GripperCommand::kStop, nullptr, 0));
+  ASSERT_TRUE(client.send(fci::GripperCommand::kStop, nullptr, 0));
   client.run_until_reply(1.0);
   client.run_until_reply(1.0);
   ASSERT_EQ(client.replies.size(), 3u);
@@ -556,6 +577,38 @@ TEST(FciGripperServer, StopAbortsTheRunningCommand) {
   EXPECT_EQ(client.status(1), static_cast<uint16_t>(fci::GripperStatus::kAborted));
   EXPECT_EQ(client.command_id(2), 2u);
   EXPECT_EQ(client.status(2), static_cast<uint16_t>(fci::GripperStatus::kSuccess));
+}
+
+// The Cobot Pump's server (port 1339) on the default scenario: a 0.3 kg part under the cup.
+TEST(FciVacuumGripperServer, SucksThePartAndTheArmCarriesItUntilDropOff) {
+  DeviceClient<rt::VacuumPump, fci::VacuumStatePacket> client(
+      "default", rt::VacuumPump(rt::load_scenario(rt::default_scenario_path()).vacuum_gripper));
+  EXPECT_FALSE(client.connect(3)) << "the gripper's version is not the pump's";
+  EXPECT_EQ(client.status(0), 1);
+  client.server().open_connection([&](const std::vector<uint8_t>& bytes) { client.replies.push_back(bytes); });
+  ASSERT_TRUE(client.connect(fci::kVacuumGripperVersion));
+  EXPECT_EQ(client.status(1), 0);
+
+  const fci::VacuumRequest vacuum{60, 0, 1000};   // 600 mbar, P0, 1 s
+  ASSERT_TRUE(client.send(static_cast<uint16_t>(fci::VacuumCommand::kVacuum), &vacuum, sizeof(vacuum)));
+  const std::vector<fci::VacuumStatePacket> states = client.run_until_reply(2.0);
+  ASSERT_EQ(client.replies.size(), 3u);
+  EXPECT_EQ(client.status(2), static_cast<uint16_t>(fci::GripperStatus::kSuccess));
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.back().part_present, 1);
+  EXPECT_GT(client.server().device().vacuum_level(), 500.0);
+
+  const fci::DropOffRequest drop{1000};
+  ASSERT_TRUE(client.send(static_cast<uint16_t>(fci::VacuumCommand::kDropOff), &drop, sizeof(drop)));
+  client.run_until_reply(2.0);
+  ASSERT_EQ(client.replies.size(), 4u);
+  EXPECT_EQ(client.status(3), static_cast<uint16_t>(fci::GripperStatus::kSuccess));
+  EXPECT_EQ(client.server().device().carried_object().mass, 0.0);
+
+  const fci::VacuumRequest bad_profile{60, 7, 1000};
+  ASSERT_TRUE(client.send(static_cast<uint16_t>(fci::VacuumCommand::kVacuum), &bad_profile, sizeof(bad_profile)));
+  EXPECT_EQ(client.status(4), static_cast<uint16_t>(fci::GripperStatus::kFail));
+  EXPECT_NE(client.lines.back().find("vacuum gripper: Vacuum failed: profile 7 is not P0..P3"), std::string::npos) << client.lines.back();
 }
 
 }  // namespace

@@ -108,6 +108,11 @@ def check_grasp(output, initial_q):
         raise CheckFailed("grasp_object did not print 'Grasped object, will release it now.'")
 
 
+def check_vacuum(output, initial_q):
+    if "Vacuumed object, will release it now." not in output:
+        raise CheckFailed("vacuum_object did not print 'Vacuumed object, will release it now.'")
+
+
 def check_still_running(output, initial_q):
     # An endless controller: it must still be running (no exception) when the driver stops it.
     if "Press Enter to continue..." not in output:
@@ -122,6 +127,7 @@ CHECKS = {
     "joint_impedance_control": check_reached_start_pose,
     "cartesian_impedance_control": check_still_running,
     "grasp_object": check_grasp,
+    "vacuum_object": check_vacuum,
 }
 
 

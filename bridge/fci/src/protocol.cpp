@@ -221,6 +221,27 @@ const char* gripper_command_name(GripperCommand command) {
   return "?";
 }
 
+const char* vacuum_command_name(VacuumCommand command) {
+  switch (command) {
+    case VacuumCommand::kConnect: return "Connect";
+    case VacuumCommand::kVacuum: return "Vacuum";
+    case VacuumCommand::kDropOff: return "DropOff";
+    case VacuumCommand::kStop: return "Stop";
+  }
+  return "?";
+}
+
+std::size_t vacuum_request_size(uint16_t command) {
+  const auto with = [](std::size_t payload) { return sizeof(GripperMessageHeader) + payload; };
+  switch (static_cast<VacuumCommand>(command)) {
+    case VacuumCommand::kConnect: return with(sizeof(GripperConnectRequest));
+    case VacuumCommand::kVacuum: return with(sizeof(VacuumRequest));
+    case VacuumCommand::kDropOff: return with(sizeof(DropOffRequest));
+    case VacuumCommand::kStop: return with(0);
+  }
+  return 0;
+}
+
 std::size_t gripper_request_size(uint16_t command) {
   const auto with = [](std::size_t payload) { return sizeof(GripperMessageHeader) + payload; };
   switch (static_cast<GripperCommand>(command)) {

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 
@@ -175,22 +176,27 @@ sockaddr_in ipv4_address(const std::string& address) {
   return a;
 }
 
-// The robot on the network: its command port with the 1 kHz exchange, and the hand's port.
+// The robot on the network: its command port with the 1 kHz exchange, and its devices' ports.
 class Network : public rt::MessageBus {
  public:
   Network(rt::Emulator& robot, const FciServeOptions& options)
       : options_(options),
         server_(robot, options.version, options.model_library, [this](const std::string& line) { diagnose(line); }, options.faults),
         robot_port_(ipv4_address(options.address), kCommandPort, server_, "", [this](const std::string& line) { diagnose(line); }) {
+    const auto diagnostic = [this](const std::string& line) { diagnose(line); };
     if (options.hand) {
-      gripper_.emplace(robot, *options.hand, [this](const std::string& line) { diagnose(line); });
-      gripper_port_.emplace(ipv4_address(options.address), kGripperPort, *gripper_, "gripper: ",
-                            [this](const std::string& line) { diagnose(line); });
+      gripper_ = std::make_unique<GripperServer>(robot, rt::Hand(*options.hand), diagnostic);
+      add_device(*gripper_, kGripperPort, "gripper: ");
+    }
+    if (options.vacuum_gripper) {
+      vacuum_gripper_ = std::make_unique<VacuumGripperServer>(robot, rt::VacuumPump(*options.vacuum_gripper), diagnostic);
+      add_device(*vacuum_gripper_, kVacuumGripperPort, "vacuum gripper: ");
     }
   }
 
   FciServer& server() { return server_; }
-  const GripperServer* gripper() const { return gripper_ ? &*gripper_ : nullptr; }
+  const GripperServer* gripper() const { return gripper_.get(); }
+  const VacuumGripperServer* vacuum_gripper() const { return vacuum_gripper_.get(); }
   uint64_t foreign_packets() const { return foreign_packets_; }
 
   // MessageBus
@@ -232,21 +238,32 @@ class Network : public rt::MessageBus {
   const FciServeOptions& options_;
   FciServer server_;
   Port robot_port_;
-  std::optional<GripperServer> gripper_;
-  std::optional<Port> gripper_port_;
+  // The devices and their ports (their UDP sockets only send state messages).
+  struct Device {
+    DeviceServerBase* server;
+    std::unique_ptr<Port> port;
+  };
+  void add_device(DeviceServerBase& server, uint16_t port, const std::string& name) {
+    devices_.push_back({&server, std::make_unique<Port>(ipv4_address(options_.address), port, server, name,
+                                                        [this](const std::string& line) { diagnose(line); })});
+  }
+  std::unique_ptr<GripperServer> gripper_;
+  std::unique_ptr<VacuumGripperServer> vacuum_gripper_;
+  std::vector<Device> devices_;
   uint64_t foreign_packets_ = 0;
   std::optional<int64_t> state_sent_ns_, answered_ns_;   // the round trip of a motion's cycle
 };
 
 void Network::receive_for(int64_t wait_ns) {
-  pollfd fds[3] = {{robot_port_.udp_fd(), POLLIN, 0}, {robot_port_.tcp_fd(), POLLIN, 0}, {-1, POLLIN, 0}};
-  if (gripper_port_) fds[2].fd = gripper_port_->tcp_fd();   // (its UDP socket only sends)
+  pollfd fds[4] = {{robot_port_.udp_fd(), POLLIN, 0}, {robot_port_.tcp_fd(), POLLIN, 0}, {-1, POLLIN, 0}, {-1, POLLIN, 0}};
+  for (std::size_t d = 0; d < devices_.size(); ++d) fds[2 + d].fd = devices_[d].port->tcp_fd();
   const timespec timeout{wait_ns / 1'000'000'000, wait_ns % 1'000'000'000};
-  if (::ppoll(fds, 3, &timeout, nullptr) <= 0) return;
+  if (::ppoll(fds, 4, &timeout, nullptr) <= 0) return;
   const short ready = POLLIN | POLLHUP | POLLERR;
   if (fds[0].revents & POLLIN) receive_commands();
   if (fds[1].revents & ready) robot_port_.on_tcp_readable();
-  if (fds[2].revents & ready) gripper_port_->on_tcp_readable();
+  for (std::size_t d = 0; d < devices_.size(); ++d)
+    if (fds[2 + d].revents & ready) devices_[d].port->on_tcp_readable();
 }
 
 // One robot cycle: the server steps with the command that answered the state (or none), the new
@@ -257,8 +274,8 @@ void Network::robot_cycle(rt::CycleDriver& driver) {
   state_sent_ns_.reset();
   answered_ns_.reset();
   server_.step();
-  if (gripper_)
-    if (const std::optional<GripperStatePacket> state = gripper_->step()) gripper_port_->send_udp(&*state, sizeof(*state));
+  for (const Device& device : devices_)
+    if (const std::optional<std::vector<uint8_t>> state = device.server->step()) device.port->send_udp(state->data(), state->size());
   driver.count_cycle(lost);
   send_state();
   if (options_.after_cycle) options_.after_cycle(server_.emulator().state(), server_.last_cycle());
@@ -288,6 +305,7 @@ FciServeReport serve_fci(rt::Emulator& robot, const FciServeOptions& options) {
   report.emulator = robot.counters();
   report.foreign_packets = network.foreign_packets();
   if (network.gripper()) report.gripper = network.gripper()->counters();
+  if (network.vacuum_gripper()) report.vacuum_gripper = network.vacuum_gripper()->counters();
   report.last_reflex = robot.reflex_reason();
   return report;
 }

@@ -222,6 +222,34 @@ struct GripperStatePacket {
 // The size of a gripper request message (header included); 0 for a code that is no command.
 std::size_t gripper_request_size(uint16_t command);
 
+// --- The Cobot Pump's server (port 1339), research-interface vacuum gripper version 1 in both
+// libfranka 0.9 and 0.13: the hand's message shape (the same header and statuses), its own commands.
+inline constexpr uint16_t kVacuumGripperVersion = 1;
+inline constexpr uint16_t kVacuumGripperPort = 1339;
+enum class VacuumCommand : uint16_t { kConnect, kVacuum, kDropOff, kStop };
+const char* vacuum_command_name(VacuumCommand command);
+
+#pragma pack(push, 1)
+struct VacuumRequest {
+  uint8_t vacuum;       // setpoint [10 mbar]
+  uint8_t profile;      // production setup profile P0..P3
+  int64_t timeout_ms;   // std::chrono::milliseconds
+};
+struct DropOffRequest {
+  int64_t timeout_ms;
+};
+struct VacuumStatePacket {
+  uint32_t message_id;
+  uint8_t in_control_range, part_detached, part_present;
+  uint8_t device_status;   // 0 green, 1 yellow, 2 orange, 3 red
+  int32_t actual_power;    // [%]
+  int32_t vacuum;          // [mbar]
+};
+#pragma pack(pop)
+
+// The size of a vacuum gripper request message (header included); 0 for a code that is no command.
+std::size_t vacuum_request_size(uint16_t command);
+
 // The robot state's 41 error flags (errors, reflex_reason) are in the research interface's own
 // order, which is not franka::Errors' field order (libfranka maps each field to its flag by name):
 // the flag of `error` is at wire_error_index(error).

@@ -1,6 +1,7 @@
 // `csp fci`: the emulated robot on the network as a Franka robot is (docs/fci.md): the command
 // port 1337 (TCP) and the 1 kHz UDP exchange of states and commands, so that an unmodified
-// libfranka connects to `address`; the Franka Hand on port 1338 where the robot has one. One
+// libfranka connects to `address`; the Franka Hand on port 1338 and the Cobot Pump on 1339 where
+// the robot has them. One
 // client a port at a time; the robot outlives its clients.
 #pragma once
 
@@ -9,7 +10,7 @@
 #include <optional>
 #include <string>
 
-#include "csp/fci/gripper_server.hpp"
+#include "csp/fci/device_server.hpp"
 #include "csp/fci/server.hpp"
 #include "csp/rt/cycle_driver.hpp"
 
@@ -24,6 +25,7 @@ struct FciServeOptions {
   FciServer::ModelLibrary model_library;
   rt::CommandFaults faults;              // the scenario's network faults (FciServer)
   std::optional<rt::HandSettings> hand;   // the Franka Hand on port 1338 (none: the port stays closed)
+  std::optional<rt::VacuumSettings> vacuum_gripper;   // the Cobot Pump on port 1339 (none: closed)
   const std::atomic<bool>* stop = nullptr;   // set (e.g. by SIGINT) to end the run cleanly
   std::function<void()> listening;      // called once the command port accepts connections
   FciServer::Diagnostic diagnostic;     // one line per notable event (may be empty)
@@ -35,7 +37,7 @@ struct FciServeReport {
   FciCounters counters;
   rt::EmulatorCounters emulator;
   uint64_t foreign_packets = 0;         // UDP packets from another sender than the client
-  std::optional<GripperCounters> gripper;
+  std::optional<DeviceCounters> gripper, vacuum_gripper;
   std::string last_reflex;
 };
 
