@@ -384,6 +384,39 @@ TEST(CSP_FCI_SUITE, TheGripperMessagesAreLibfrankas) {
   EXPECT_EQ(static_cast<uint16_t>(fci::GripperCommand::kStop), static_cast<uint16_t>(gripper::Command::kStop));
 }
 
+// The Cobot Pump's server (port 1339): version 1 in both libfranka versions.
+TEST(CSP_FCI_SUITE, TheVacuumGripperMessagesAreLibfrankas) {
+  namespace vacuum = CSP_FCI_VENDOR::research_interface::vacuum_gripper;
+  EXPECT_EQ(fci::kVacuumGripperVersion, vacuum::kVersion);
+  EXPECT_EQ(fci::kVacuumGripperPort, vacuum::kCommandPort);
+  EXPECT_EQ(sizeof(fci::GripperMessageHeader), sizeof(vacuum::CommandHeader));
+  EXPECT_EQ(sizeof(fci::VacuumRequest), sizeof(vacuum::Vacuum::Request));
+  CSP_EXPECT_FIELD(fci::VacuumRequest, vacuum::Vacuum::Request, vacuum);
+  CSP_EXPECT_FIELD(fci::VacuumRequest, vacuum::Vacuum::Request, profile);
+  EXPECT_EQ(offsetof(fci::VacuumRequest, timeout_ms), offsetof(vacuum::Vacuum::Request, timeout));
+  EXPECT_EQ(sizeof(fci::DropOffRequest), sizeof(vacuum::DropOff::Request));
+  EXPECT_EQ(sizeof(fci::VacuumStatePacket), sizeof(vacuum::VacuumGripperState));
+  CSP_EXPECT_FIELD(fci::VacuumStatePacket, vacuum::VacuumGripperState, message_id);
+  CSP_EXPECT_FIELD(fci::VacuumStatePacket, vacuum::VacuumGripperState, in_control_range);
+  CSP_EXPECT_FIELD(fci::VacuumStatePacket, vacuum::VacuumGripperState, part_present);
+  CSP_EXPECT_FIELD(fci::VacuumStatePacket, vacuum::VacuumGripperState, device_status);
+  CSP_EXPECT_FIELD(fci::VacuumStatePacket, vacuum::VacuumGripperState, actual_power);
+  CSP_EXPECT_FIELD(fci::VacuumStatePacket, vacuum::VacuumGripperState, vacuum);
+  // A vacuum request as libfranka builds it, read by CSP: its timeout is std::chrono::milliseconds.
+  using Message = vacuum::Vacuum::Message<vacuum::Vacuum::Request>;
+  const Message sent(vacuum::Vacuum::Header(vacuum::Command::kVacuum, 4, sizeof(Message)),
+                     vacuum::Vacuum::Request(100, vacuum::Profile::kP2, std::chrono::milliseconds(1500)));
+  EXPECT_EQ(fci::vacuum_request_size(static_cast<uint16_t>(vacuum::Command::kVacuum)), sizeof(Message));
+  fci::VacuumRequest read;
+  std::memcpy(&read, reinterpret_cast<const uint8_t*>(&sent) + sizeof(fci::GripperMessageHeader), sizeof(read));
+  EXPECT_EQ(read.vacuum, 100);
+  EXPECT_EQ(read.profile, 2);
+  EXPECT_EQ(read.timeout_ms, 1500);
+  EXPECT_EQ(fci::vacuum_request_size(static_cast<uint16_t>(vacuum::Command::kDropOff)),
+            sizeof(vacuum::DropOff::Message<vacuum::DropOff::Request>));
+  EXPECT_EQ(static_cast<uint16_t>(fci::VacuumCommand::kStop), static_cast<uint16_t>(vacuum::Command::kStop));
+}
+
 #undef CSP_EXPECT_FIELD
 
 }  // namespace

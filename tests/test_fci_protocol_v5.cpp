@@ -1,5 +1,6 @@
 // CSP's FCI version 5 wire format against libfranka 0.9.2's research-interface headers (fci_protocol_checks.hpp).
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <cstddef>
 #include <cstring>
@@ -12,6 +13,7 @@ namespace vendor_v5 {
 #include <include/research_interface/robot/rbk_types.h>
 #include <include/research_interface/robot/service_types.h>
 #include <include/research_interface/gripper/types.h>
+#include <include/research_interface/vacuum_gripper/types.h>
 }  // namespace vendor_v5
 
 #define CSP_FCI_VERSION 5
