@@ -38,7 +38,7 @@ TEST(CSP_FCI_SUITE, MessagesHaveLibfrankasSizesAndOffsets) {
   fci::ConnectResponse read;
   std::memcpy(static_cast<void*>(&read), &connected, sizeof(read));
   EXPECT_EQ(read.status, static_cast<uint8_t>(ri::Connect::Status::kIncompatibleLibraryVersion));
-  EXPECT_EQ(read.version, ri::kVersion);
+  EXPECT_EQ(+read.version, ri::kVersion);
   EXPECT_EQ(sizeof(fci::MoveRequest), sizeof(ri::Move::Request));
   CSP_EXPECT_FIELD(fci::MoveRequest, ri::Move::Request, controller_mode);
   CSP_EXPECT_FIELD(fci::MoveRequest, ri::Move::Request, motion_generator_mode);
@@ -73,8 +73,8 @@ TEST(CSP_FCI_SUITE, MessagesHaveLibfrankasSizesAndOffsets) {
   fci::GetCartesianLimitResponse limit;
   std::memcpy(static_cast<void*>(&limit), &wall, sizeof(limit));
   EXPECT_EQ(limit.status, 2);
-  EXPECT_EQ(limit.object_world_size[2], 3.0);
-  EXPECT_EQ(limit.object_frame[13], 0.25);
+  EXPECT_EQ(CSP_FCI_FIELD(limit, object_world_size)[2], 3.0);   // (at odd offsets: copied out)
+  EXPECT_EQ(CSP_FCI_FIELD(limit, object_frame)[13], 0.25);
   EXPECT_EQ(limit.object_activation, 1);
 #endif
 }
@@ -319,30 +319,34 @@ TEST(CSP_FCI_SUITE, TheRobotCommandHasLibfrankasLayout) {
   EXPECT_EQ(offsetof(C, tau_J_d), offsetof(ri::RobotCommand, control) + offsetof(ri::ControllerCommand, tau_J_d));
 
   // A command libfranka builds, decoded by CSP: every value where libfranka put it.
-  ri::RobotCommand sent{};
+  alignas(8) ri::RobotCommand sent{};
   sent.message_id = 123456789;
+  std::array<double, 7> tau{};
   for (int i = 0; i < 7; ++i) {
     sent.motion.q_c[i] = 0.1 * i;
     sent.motion.dq_c[i] = -0.2 * i;
-    sent.control.tau_J_d[i] = 1.5 + i;
+    tau[i] = 1.5 + i;
   }
+  // (tau_J_d lies at an odd offset: copied in)
+  std::memcpy(reinterpret_cast<uint8_t*>(&sent) + offsetof(ri::RobotCommand, control) + offsetof(ri::ControllerCommand, tau_J_d),
+              tau.data(), sizeof(tau));
   sent.motion.O_T_EE_c[12] = 0.42;
   sent.motion.O_dP_EE_c[5] = -0.3;
   sent.motion.elbow_c = {0.7, -1.0};
   sent.motion.valid_elbow = true;
   sent.motion.motion_generation_finished = true;
-  const std::optional<fci::RobotCommandPacketV7> got = fci::decode_robot_command(&sent, sizeof(sent), kVersion);
+  const std::optional<fci::RobotCommandValues> got = fci::decode_robot_command(&sent, sizeof(sent), kVersion);
   ASSERT_TRUE(got);
   EXPECT_EQ(got->message_id, 123456789u);
-  EXPECT_EQ(got->motion.q_c[6], 0.6000000000000001);
-  EXPECT_EQ(got->motion.dq_c[3], sent.motion.dq_c[3]);
+  EXPECT_EQ(got->q_c[6], 0.6000000000000001);
+  EXPECT_EQ(got->dq_c[3], sent.motion.dq_c[3]);
   EXPECT_EQ(got->tau_J_d[4], 5.5);
-  EXPECT_EQ(got->motion.O_T_EE_c[12], 0.42);
-  EXPECT_EQ(got->motion.O_dP_EE_c[5], -0.3);
-  EXPECT_EQ(got->motion.elbow_c[1], -1.0);
-  EXPECT_TRUE(got->motion.valid_elbow);
-  EXPECT_TRUE(got->motion.motion_generation_finished);
-  EXPECT_EQ(got->torque_command_finished, 0);
+  EXPECT_EQ(got->O_T_EE_c[12], 0.42);
+  EXPECT_EQ(got->O_dP_EE_c[5], -0.3);
+  EXPECT_EQ(got->elbow_c[1], -1.0);
+  EXPECT_TRUE(got->valid_elbow);
+  EXPECT_TRUE(got->motion_generation_finished);
+  EXPECT_FALSE(got->torque_command_finished);
   EXPECT_FALSE(fci::decode_robot_command(&sent, sizeof(sent) - 1, kVersion));
 }
 
@@ -368,7 +372,7 @@ TEST(CSP_FCI_SUITE, TheGripperMessagesAreLibfrankas) {
   const GraspMessage sent(gripper::Grasp::Header(gripper::Command::kGrasp, 9, sizeof(GraspMessage)),
                           gripper::Grasp::Request(0.03, gripper::Grasp::GraspEpsilon(0.004, 0.005), 0.1, 40.0));
   EXPECT_EQ(fci::gripper_request_size(static_cast<uint16_t>(gripper::Command::kGrasp)), sizeof(GraspMessage));
-  fci::GraspRequest grasp;
+  alignas(8) fci::GraspRequest grasp;
   std::memcpy(&grasp, reinterpret_cast<const uint8_t*>(&sent) + sizeof(fci::GripperMessageHeader), sizeof(grasp));
   EXPECT_EQ(grasp.width, 0.03);
   EXPECT_EQ(grasp.epsilon_inner, 0.004);
@@ -411,7 +415,7 @@ TEST(CSP_FCI_SUITE, TheVacuumGripperMessagesAreLibfrankas) {
   std::memcpy(&read, reinterpret_cast<const uint8_t*>(&sent) + sizeof(fci::GripperMessageHeader), sizeof(read));
   EXPECT_EQ(read.vacuum, 100);
   EXPECT_EQ(read.profile, 2);
-  EXPECT_EQ(read.timeout_ms, 1500);
+  EXPECT_EQ(+read.timeout_ms, 1500);
   EXPECT_EQ(fci::vacuum_request_size(static_cast<uint16_t>(vacuum::Command::kDropOff)),
             sizeof(vacuum::DropOff::Message<vacuum::DropOff::Request>));
   EXPECT_EQ(static_cast<uint16_t>(fci::VacuumCommand::kStop), static_cast<uint16_t>(vacuum::Command::kStop));

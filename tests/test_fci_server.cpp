@@ -30,6 +30,10 @@ class Client {
 
   fci::FciServer& server() { return server_; }
   rt::Emulator& robot() { return robot_; }
+  // The current state packet, held 8-byte aligned (a packed struct's own alignment is 1): its
+  // arrays of doubles may then be read through references; its last double needs a copy (+).
+  struct alignas(8) State : fci::RobotStatePacket {};
+  State state() const { return {server_.state_packet()}; }
 
   // A request message as libfranka builds it: header (its size counting itself) and payload.
   template <typename Payload>
@@ -81,7 +85,7 @@ class Client {
 
   // One cycle with the command a libfranka control loop sends: it answers the current state.
   void cycle(const fci::RobotCommandPacketV7& command) {
-    fci::RobotCommandPacketV7 packet = command;
+    alignas(8) fci::RobotCommandPacketV7 packet = command;
     packet.message_id = server_.state_packet().message_id;
     server_.receive_udp(&packet, fci::robot_command_size(server_.version()));
     server_.step();
@@ -114,8 +118,8 @@ fci::MoveRequest move(fci::MoveMotionGeneratorMode generator, fci::MoveControlle
 }
 
 // Holds the joints where they are: a joint position command of the current q_d.
-fci::RobotCommandPacketV7 hold(const fci::RobotStatePacket& state, bool finished = false) {
-  fci::RobotCommandPacketV7 command{};
+fci::RobotCommandPacketV7 hold(const Client::State& state, bool finished = false) {
+  alignas(8) fci::RobotCommandPacketV7 command{};
   command.motion.q_c = state.q_d;
   command.motion.motion_generation_finished = finished;
   return command;
@@ -195,7 +199,7 @@ TEST(FciServer, AMotionRunsAndItsMoveIsAnsweredWhenItFinishes) {
   for (const fci::Version version : {fci::kPandaVersion, fci::kFr3Version}) {
     Client client(version);
     ASSERT_TRUE(client.connect(version));
-    const fci::RobotStatePacket idle = client.server().state_packet();
+    const Client::State idle = client.state();
     EXPECT_EQ(idle.motion_generator_mode, fci::StateMotionGeneratorMode::kIdle);
     EXPECT_EQ(idle.controller_mode, fci::StateControllerMode::kOther);
     EXPECT_EQ(idle.robot_mode, fci::StateRobotMode::kIdle);
@@ -208,22 +212,22 @@ TEST(FciServer, AMotionRunsAndItsMoveIsAnsweredWhenItFinishes) {
     EXPECT_EQ(client.reply(1).status, client.code(Command::kMove, Status::kMotionStarted));
     // The state shows the motion as libfranka's startMotion waits for it.
     client.cycle_without_command();
-    const fci::RobotStatePacket moving = client.server().state_packet();
+    const Client::State moving = client.state();
     EXPECT_EQ(moving.motion_generator_mode, fci::StateMotionGeneratorMode::kJointPosition);
     EXPECT_EQ(moving.controller_mode, fci::StateControllerMode::kJointImpedance);
     EXPECT_EQ(moving.robot_mode, fci::StateRobotMode::kMove);
     EXPECT_EQ(moving.message_id, idle.message_id + 1);
 
-    for (int k = 0; k < 50; ++k) client.cycle(hold(client.server().state_packet()));
+    for (int k = 0; k < 50; ++k) client.cycle(hold(client.state()));
     EXPECT_EQ(client.robot().counters().lost_commands, 1u);   // the cycle libfranka spends waiting for the state
-    client.cycle(hold(client.server().state_packet(), true));
+    client.cycle(hold(client.state(), true));
     ASSERT_EQ(client.replies.size(), 3u);
     const Client::Reply done = client.reply(2);
     EXPECT_EQ(done.header.command, fci::command_code(Command::kMove, version));
     EXPECT_EQ(done.header.command_id, move_id);
     EXPECT_EQ(done.status, client.code(Command::kMove, Status::kSuccess));
     EXPECT_FALSE(client.server().in_motion());
-    EXPECT_EQ(client.server().state_packet().motion_generator_mode, fci::StateMotionGeneratorMode::kIdle);
+    EXPECT_EQ(client.state().motion_generator_mode, fci::StateMotionGeneratorMode::kIdle);
   }
 }
 
@@ -232,13 +236,13 @@ TEST(FciServer, AReflexAbortsTheMoveAndShowsItsErrorUntilRecovery) {
     Client client(version);
     ASSERT_TRUE(client.connect(version));
     ASSERT_TRUE(client.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointPosition, fci::MoveControllerMode::kJointImpedance)));
-    client.cycle(hold(client.server().state_packet()));
-    fci::RobotCommandPacketV7 jump = hold(client.server().state_packet());
+    client.cycle(hold(client.state()));
+    alignas(8) fci::RobotCommandPacketV7 jump = hold(client.state());
     jump.motion.q_c[0] += 0.5;   // 0.5 rad in 1 ms: libfranka's joint_motion_generator_velocity_limits_violation
     client.cycle(jump);
     ASSERT_EQ(client.replies.size(), 3u);
     EXPECT_EQ(client.reply(2).status, client.code(Command::kMove, Status::kReflexAborted));
-    const fci::RobotStatePacket reflex = client.server().state_packet();
+    const Client::State reflex = client.state();
     EXPECT_EQ(reflex.robot_mode, fci::StateRobotMode::kReflex);
     const int velocity = fci::wire_error_index(rt::Error::joint_motion_generator_velocity_limits_violation);
     EXPECT_TRUE(reflex.reflex_reason[velocity]);
@@ -251,7 +255,7 @@ TEST(FciServer, AReflexAbortsTheMoveAndShowsItsErrorUntilRecovery) {
     ASSERT_TRUE(client.send(Command::kAutomaticErrorRecovery));
     EXPECT_EQ(client.reply(4).status, 0);
     client.cycle_without_command();
-    const fci::RobotStatePacket recovered = client.server().state_packet();
+    const Client::State recovered = client.state();
     EXPECT_EQ(recovered.robot_mode, fci::StateRobotMode::kIdle);
     EXPECT_FALSE(recovered.errors[velocity]);
     EXPECT_TRUE(recovered.reflex_reason[velocity]) << "the last motion's errors stay, as on the robot";
@@ -271,7 +275,7 @@ TEST(FciServer, AClientThatVanishesMidMotionEndsItAsTheRobotWould) {
   EXPECT_EQ(client.server().counters().client_losses, 1u);
   for (int k = 0; k < 30 && client.server().in_motion(); ++k) client.cycle_without_command();
   EXPECT_FALSE(client.server().in_motion());
-  const fci::RobotStatePacket state = client.server().state_packet();
+  const Client::State state = client.state();
   EXPECT_EQ(state.robot_mode, fci::StateRobotMode::kReflex);
   EXPECT_TRUE(state.reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)]);
   EXPECT_EQ(client.replies.size(), 2u) << "no answer goes to a client that has gone";
@@ -279,18 +283,18 @@ TEST(FciServer, AClientThatVanishesMidMotionEndsItAsTheRobotWould) {
   // The robot outlives its client: the next one finds it where it stopped, in Reflex mode.
   client.server().open_connection([&](const std::vector<uint8_t>& bytes) { client.replies.push_back(bytes); });
   ASSERT_TRUE(client.connect(fci::kFr3Version));
-  EXPECT_EQ(client.server().state_packet().robot_mode, fci::StateRobotMode::kReflex);
-  EXPECT_EQ(client.server().state_packet().message_id, state.message_id);
+  EXPECT_EQ(client.state().robot_mode, fci::StateRobotMode::kReflex);
+  EXPECT_EQ(client.state().message_id, state.message_id);
 }
 
 TEST(FciServer, CommandsThatAnswerNoCurrentStateAreLost) {
   Client client(fci::kPandaVersion);
   ASSERT_TRUE(client.connect(fci::kPandaVersion));
-  fci::RobotCommandPacketV7 command = hold(client.server().state_packet());
+  alignas(8) fci::RobotCommandPacketV7 command = hold(client.state());
   client.server().receive_udp(&command, fci::robot_command_size(fci::kPandaVersion));
   EXPECT_EQ(client.server().counters().rejected_commands, 1u) << "no motion runs";
   ASSERT_TRUE(client.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointPosition, fci::MoveControllerMode::kJointImpedance)));
-  command.message_id = client.server().state_packet().message_id + 5;
+  command.message_id = client.state().message_id + 5;
   client.server().receive_udp(&command, fci::robot_command_size(fci::kPandaVersion));
   EXPECT_EQ(client.server().counters().stale_commands, 1u);
   client.server().receive_udp(&command, fci::robot_command_size(fci::kFr3Version));   // version 7's size at a Panda
@@ -308,13 +312,13 @@ TEST(FciServer, TheScenariosFaultsLoseCommandsOnTheWay) {
   Client client(fci::kPandaVersion, lossy);
   ASSERT_TRUE(client.connect(fci::kPandaVersion));
   ASSERT_TRUE(client.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointPosition, fci::MoveControllerMode::kJointImpedance)));
-  for (int k = 0; k < 300; ++k) client.cycle(hold(client.server().state_packet()));
+  for (int k = 0; k < 300; ++k) client.cycle(hold(client.state()));
   const uint64_t lost = client.server().counters().injected_losses;
   EXPECT_GT(lost, 100u);
   EXPECT_LT(lost, 200u);
   EXPECT_EQ(client.robot().counters().lost_commands, lost);
-  EXPECT_GT(client.server().state_packet().control_command_success_rate, 0.3);
-  EXPECT_LT(client.server().state_packet().control_command_success_rate, 0.7);
+  EXPECT_GT(+client.state().control_command_success_rate, 0.3);
+  EXPECT_LT(+client.state().control_command_success_rate, 0.7);
 
   // A burst of 20 lost commands 10 ms into the motion: the robot's communication reflex.
   rt::CommandFaults burst;
@@ -324,12 +328,12 @@ TEST(FciServer, TheScenariosFaultsLoseCommandsOnTheWay) {
   ASSERT_TRUE(bursty.send(Command::kMove, move(fci::MoveMotionGeneratorMode::kJointPosition, fci::MoveControllerMode::kJointImpedance)));
   int cycles = 0;
   while (bursty.server().in_motion() && cycles < 100) {
-    bursty.cycle(hold(bursty.server().state_packet()));
+    bursty.cycle(hold(bursty.state()));
     ++cycles;
   }
   EXPECT_EQ(cycles, 30);
   EXPECT_EQ(bursty.server().counters().injected_losses, 20u);
-  EXPECT_TRUE(bursty.server().state_packet().reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)]);
+  EXPECT_TRUE(bursty.state().reflex_reason[fci::wire_error_index(rt::Error::communication_constraints_violation)]);
 }
 
 TEST(FciServer, SettingsAreAppliedBetweenMotionsAndRefusedWithTheRobotsStatus) {
@@ -339,8 +343,8 @@ TEST(FciServer, SettingsAreAppliedBetweenMotionsAndRefusedWithTheRobotsStatus) {
   ASSERT_TRUE(client.send(Command::kSetLoad, load));
   EXPECT_EQ(client.reply(1).status, 0);
   client.cycle_without_command();
-  EXPECT_EQ(client.server().state_packet().m_load, 0.5);
-  EXPECT_EQ(client.server().state_packet().F_x_Cload[2], 0.05);
+  EXPECT_EQ(client.state().m_load, 0.5);
+  EXPECT_EQ(client.state().F_x_Cload[2], 0.05);
 
   fci::JointImpedanceRequest nan{{3000, 3000, 3000, 2500, 2500, 2000, std::nan("")}};
   ASSERT_TRUE(client.send(Command::kSetJointImpedance, nan));
@@ -371,7 +375,7 @@ TEST(FciServer, StopMoveEndsTheMotionAndPreemptsItsMove) {
   EXPECT_EQ(client.reply(4).header.command_id, move_id);
   EXPECT_EQ(client.reply(4).status, client.code(Command::kMove, Status::kPreempted));
   client.cycle_without_command();
-  EXPECT_EQ(client.server().state_packet().robot_mode, fci::StateRobotMode::kIdle);
+  EXPECT_EQ(client.state().robot_mode, fci::StateRobotMode::kIdle);
 }
 
 TEST(FciServer, TorqueControlIsAZeroVelocityMotionUnderTheExternalController) {
@@ -382,9 +386,10 @@ TEST(FciServer, TorqueControlIsAZeroVelocityMotionUnderTheExternalController) {
     ASSERT_TRUE(client.connect(fci::kFr3Version));
     ASSERT_TRUE(client.send(Command::kMove, move(generator, fci::MoveControllerMode::kExternalController)));
     fci::RobotCommandPacketV7 torque{};
-    torque.tau_J_d = {0, 0, 0, 0, 0, 0, 0.5};
+    const std::array<double, 7> tau = {0, 0, 0, 0, 0, 0, 0.5};   // (tau_J_d lies at an odd offset: copied in)
+    std::memcpy(reinterpret_cast<uint8_t*>(&torque) + offsetof(fci::RobotCommandPacketV7, tau_J_d), tau.data(), sizeof(tau));
     for (int k = 0; k < 20; ++k) client.cycle(torque);
-    const fci::RobotStatePacket state = client.server().state_packet();
+    const Client::State state = client.state();
     EXPECT_EQ(state.controller_mode, fci::StateControllerMode::kExternalController);
     EXPECT_EQ(state.tau_J_d[6], 0.5);
     EXPECT_GT(state.dq[6], 0.0) << "the user's torque drives joint 7";
@@ -416,7 +421,7 @@ TEST(FciServer, TheModelLibraryFollowsItsResponseAndOnlyForX64Linux) {
 
 TEST(FciServer, TheStatePacketIsTheRobotsState) {
   Client client(fci::kPandaVersion);
-  const fci::RobotStatePacket p = client.server().state_packet();
+  const Client::State p = client.state();
   const rt::RobotState& s = client.robot().state();
   EXPECT_EQ(p.message_id, static_cast<uint64_t>(s.time.toMSec()));
   EXPECT_EQ(p.q, s.q);
@@ -426,7 +431,7 @@ TEST(FciServer, TheStatePacketIsTheRobotsState) {
   EXPECT_EQ(p.m_ee, s.m_ee);
   EXPECT_EQ(p.I_ee, s.I_ee);
   EXPECT_EQ(p.theta, s.theta);
-  EXPECT_EQ(p.control_command_success_rate, s.control_command_success_rate);
+  EXPECT_EQ(+p.control_command_success_rate, s.control_command_success_rate);
 }
 
 }  // namespace
@@ -535,7 +540,7 @@ TEST(FciGripperServer, ACommandIsAnsweredWhenTheFingersArrive) {
   EXPECT_EQ(client.status(1), static_cast<uint16_t>(fci::GripperStatus::kSuccess));
   EXPECT_EQ(client.command_id(1), 1u);
   ASSERT_GE(states.size(), 4u) << "a state message about every 100 ms";
-  EXPECT_LT(states.back().width, states.front().width);
+  EXPECT_LT(+states.back().width, +states.front().width);
   EXPECT_NEAR(client.server().device().state().width, 0.04, 1e-9);
   // A move through the object stops at it: unsuccessful, as libfranka's move() returning false.
   const fci::GripperMoveRequest through{0.02, 0.1};

@@ -19,11 +19,11 @@ struct DeviceProtocol<rt::Hand> {
     switch (static_cast<GripperCommand>(command)) {
       case GripperCommand::kHoming: return hand.homing();
       case GripperCommand::kGrasp: {
-        const auto r = read_payload<GraspRequest>(payload);
+        alignas(8) const auto r = read_payload<GraspRequest>(payload);
         return hand.grasp(r.width, r.speed, r.force, r.epsilon_inner, r.epsilon_outer);
       }
       case GripperCommand::kMove: {
-        const auto r = read_payload<GripperMoveRequest>(payload);
+        alignas(8) const auto r = read_payload<GripperMoveRequest>(payload);
         return hand.move(r.width, r.speed);
       }
       case GripperCommand::kStop: return hand.stop();

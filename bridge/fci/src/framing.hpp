@@ -11,7 +11,8 @@
 
 namespace csp::fci {
 
-// A request's fixed-size payload (packed, possibly unaligned in the buffer).
+// A request's fixed-size payload (packed, possibly unaligned in the buffer). Callers that read its
+// arrays hold it as `alignas(8)`: every request's doubles lie at multiples of 8 in it.
 template <typename T>
 T read_payload(const uint8_t* payload) {
   T value;

@@ -181,11 +181,22 @@ std::size_t robot_command_size(Version version) {
   return version == kPandaVersion ? sizeof(RobotCommandPacketV5) : sizeof(RobotCommandPacketV7);
 }
 
-std::optional<RobotCommandPacketV7> decode_robot_command(const void* data, std::size_t size, Version version) {
+std::optional<RobotCommandValues> decode_robot_command(const void* data, std::size_t size, Version version) {
   if (size != robot_command_size(version)) return std::nullopt;
   RobotCommandPacketV7 packet{};
   std::memcpy(&packet, data, size);   // version 5 lacks only the last byte: torque_command_finished stays 0
-  return packet;
+  RobotCommandValues v;
+  v.message_id = CSP_FCI_FIELD(packet, message_id);
+  v.q_c = CSP_FCI_FIELD(packet, motion.q_c);
+  v.dq_c = CSP_FCI_FIELD(packet, motion.dq_c);
+  v.O_T_EE_c = CSP_FCI_FIELD(packet, motion.O_T_EE_c);
+  v.O_dP_EE_c = CSP_FCI_FIELD(packet, motion.O_dP_EE_c);
+  v.elbow_c = CSP_FCI_FIELD(packet, motion.elbow_c);
+  v.valid_elbow = CSP_FCI_FIELD(packet, motion.valid_elbow);
+  v.motion_generation_finished = CSP_FCI_FIELD(packet, motion.motion_generation_finished);
+  v.tau_J_d = CSP_FCI_FIELD(packet, tau_J_d);
+  v.torque_command_finished = CSP_FCI_FIELD(packet, torque_command_finished) != 0;
+  return v;
 }
 
 std::size_t request_size(Command command, Version version) {

@@ -253,23 +253,35 @@ Status FciServer::handle_setting(Command command, const uint8_t* payload) {
   try {
     switch (command) {
       case Command::kSetCollisionBehavior: {
-        const auto r = read_payload<CollisionBehaviorRequest>(payload);
+        alignas(8) const auto r = read_payload<CollisionBehaviorRequest>(payload);
         emulator_.set_collision_behavior(rt::collision_behavior(
             r.lower_torque_thresholds_acceleration, r.upper_torque_thresholds_acceleration, r.lower_torque_thresholds_nominal,
             r.upper_torque_thresholds_nominal, r.lower_force_thresholds_acceleration, r.upper_force_thresholds_acceleration,
             r.lower_force_thresholds_nominal, r.upper_force_thresholds_nominal));
         break;
       }
-      case Command::kSetJointImpedance:
-        emulator_.set_joint_impedance(from_array<Vector7>(read_payload<JointImpedanceRequest>(payload).K_theta));
+      case Command::kSetJointImpedance: {
+        alignas(8) const auto r = read_payload<JointImpedanceRequest>(payload);
+        emulator_.set_joint_impedance(from_array<Vector7>(r.K_theta));
         break;
-      case Command::kSetCartesianImpedance:
-        emulator_.set_cartesian_impedance(from_array<Vector6>(read_payload<CartesianImpedanceRequest>(payload).K_x));
+      }
+      case Command::kSetCartesianImpedance: {
+        alignas(8) const auto r = read_payload<CartesianImpedanceRequest>(payload);
+        emulator_.set_cartesian_impedance(from_array<Vector6>(r.K_x));
         break;
-      case Command::kSetEEToK: emulator_.set_K(pose_of(read_payload<EEToKRequest>(payload).EE_T_K, "setK")); break;
-      case Command::kSetNEToEE: emulator_.set_EE(pose_of(read_payload<NEToEERequest>(payload).NE_T_EE, "setEE")); break;
+      }
+      case Command::kSetEEToK: {
+        alignas(8) const auto r = read_payload<EEToKRequest>(payload);
+        emulator_.set_K(pose_of(r.EE_T_K, "setK"));
+        break;
+      }
+      case Command::kSetNEToEE: {
+        alignas(8) const auto r = read_payload<NEToEERequest>(payload);
+        emulator_.set_EE(pose_of(r.NE_T_EE, "setEE"));
+        break;
+      }
       case Command::kSetLoad: {
-        const auto r = read_payload<LoadRequest>(payload);
+        alignas(8) const auto r = read_payload<LoadRequest>(payload);
         RigidBodyInertia load;
         load.mass = r.m_load;
         load.com = from_array<Vector3>(r.F_x_Cload);
@@ -300,7 +312,7 @@ uint64_t FciServer::message_id() const { return static_cast<uint64_t>(emulator_.
 
 RobotStatePacket FciServer::state_packet() const {
   const rt::RobotState& s = emulator_.state();
-  RobotStatePacket p{};
+  alignas(8) RobotStatePacket p{};   // (packed: aligned here, its arrays of doubles are)
   p.message_id = message_id();
   p.O_T_EE = s.O_T_EE;
   p.O_T_EE_d = s.O_T_EE_d;
@@ -358,7 +370,7 @@ void FciServer::receive_udp(const void* data, std::size_t size) {
     ++counter;
     if (is_power_of_ten(counter)) diagnose("UDP command packet dropped: " + what + " (" + std::to_string(counter) + " so far)");
   };
-  const std::optional<RobotCommandPacketV7> packet = decode_robot_command(data, size, version_);
+  const std::optional<RobotCommandValues> packet = decode_robot_command(data, size, version_);
   if (!packet)
     return reject(counters_.rejected_commands, std::to_string(size) + " bytes, expected " + std::to_string(robot_command_size(version_)));
   if (!client_udp_port_ || !motion_) return reject(counters_.rejected_commands, "no motion is running");
@@ -366,19 +378,18 @@ void FciServer::receive_udp(const void* data, std::size_t size) {
     return reject(counters_.stale_commands, "it answers state " + std::to_string(packet->message_id) + ", the current state is " +
                                                 std::to_string(message_id()));
   if (!channel_.delivers(motion_cycle_)) return reject(counters_.injected_losses, "lost by the scenario's faults");
-  const MotionGeneratorCommandPacket& m = packet->motion;
+  const RobotCommandValues& m = *packet;
   rt::Command command;
   switch (motion_->mode) {
     case rt::ControlMode::kJointPosition: command.values = from_array<Vector7>(m.q_c); break;
     case rt::ControlMode::kJointVelocity: command.values = from_array<Vector7>(m.dq_c); break;
     case rt::ControlMode::kCartesianPose: command.O_T_EE_c = m.O_T_EE_c; break;
     case rt::ControlMode::kCartesianVelocity: command.O_dP_EE_c = m.O_dP_EE_c; break;
-    case rt::ControlMode::kTorque: command.values = from_array<Vector7>(packet->tau_J_d); break;
+    case rt::ControlMode::kTorque: command.values = from_array<Vector7>(m.tau_J_d); break;
   }
   if (rt::is_cartesian(motion_->mode) && m.valid_elbow) command.elbow = m.elbow_c;
-  if (motion_->controller == MoveControllerMode::kExternalController) command.torque = from_array<Vector7>(packet->tau_J_d);
-  command.motion_finished = motion_->mode == rt::ControlMode::kTorque ? packet->torque_command_finished != 0
-                                                                       : m.motion_generation_finished;
+  if (motion_->controller == MoveControllerMode::kExternalController) command.torque = from_array<Vector7>(m.tau_J_d);
+  command.motion_finished = motion_->mode == rt::ControlMode::kTorque ? m.torque_command_finished : m.motion_generation_finished;
   command_ = command;
   motion_->commanded = true;
 }

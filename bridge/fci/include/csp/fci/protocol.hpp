@@ -13,9 +13,12 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <optional>
 #include <string>
+#include <type_traits>
 
 #include "csp/rt/errors.hpp"
 #include "research_interface/robot/rbk_types.h"
@@ -257,9 +260,33 @@ int wire_error_index(rt::Error error);
 
 // The size of a command packet in `version`.
 std::size_t robot_command_size(Version version);
-// A command packet of either version with the fields both have (torque_command_finished: false
-// in version 5). Returns nullopt if `size` is not the version's packet size.
-std::optional<RobotCommandPacketV7> decode_robot_command(const void* data, std::size_t size, Version version);
+// A field of a packed wire struct copied out as a value of its type. The wire puts fields where it
+// will (a command's tau_J_d at an odd offset), so reading one through a reference of its type, as
+// passing it to a function or calling an std::array member does, would be undefined behaviour.
+template <typename Field>
+Field unaligned_field(const void* packet, std::size_t offset) {
+  Field value;
+  std::memcpy(&value, static_cast<const unsigned char*>(packet) + offset, sizeof(Field));
+  return value;
+}
+#define CSP_FCI_FIELD(packet, member)                                           \
+  ::csp::fci::unaligned_field<std::remove_cvref_t<decltype((packet).member)>>( \
+      &(packet), offsetof(std::remove_cvref_t<decltype(packet)>, member))
+
+// A command packet of either version decoded into aligned values (torque_command_finished: false
+// in version 5).
+struct RobotCommandValues {
+  uint64_t message_id = 0;
+  std::array<double, 7> q_c{}, dq_c{};
+  std::array<double, 16> O_T_EE_c{};
+  std::array<double, 6> O_dP_EE_c{};
+  std::array<double, 2> elbow_c{};
+  bool valid_elbow = false, motion_generation_finished = false;
+  std::array<double, 7> tau_J_d{};
+  bool torque_command_finished = false;
+};
+// Returns nullopt if `size` is not the version's packet size.
+std::optional<RobotCommandValues> decode_robot_command(const void* data, std::size_t size, Version version);
 
 // The size of a request message (header included) of `command` in `version`.
 std::size_t request_size(Command command, Version version);
