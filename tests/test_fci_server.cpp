@@ -18,6 +18,19 @@ using namespace csp;
 using fci::Command;
 using fci::Status;
 
+// A request as libfranka builds it: the header (its size counting itself) and the payload.
+template <typename Header>
+std::vector<uint8_t> request_bytes(uint32_t command, uint32_t command_id, const void* payload, std::size_t payload_size) {
+  Header header;
+  header.command = static_cast<decltype(header.command)>(command);
+  header.command_id = command_id;
+  header.size = static_cast<uint32_t>(sizeof(header) + payload_size);
+  std::vector<uint8_t> bytes(header.size);
+  std::memcpy(bytes.data(), &header, sizeof(header));
+  if (payload_size > 0) std::memcpy(bytes.data() + sizeof(header), payload, payload_size);
+  return bytes;
+}
+
 // A client's view of one FciServer: it sends requests and keeps the robot's replies.
 class Client {
  public:
@@ -35,17 +48,10 @@ class Client {
   struct alignas(8) State : fci::RobotStatePacket {};
   State state() const { return {server_.state_packet()}; }
 
-  // A request message as libfranka builds it: header (its size counting itself) and payload.
+  // A request message as libfranka builds it (request_bytes), with the next command id.
   template <typename Payload>
   std::vector<uint8_t> message(uint32_t command_code, const Payload* payload, std::size_t payload_size) {
-    fci::MessageHeader header;
-    header.command = command_code;
-    header.command_id = next_id_++;
-    header.size = static_cast<uint32_t>(sizeof(header) + payload_size);
-    std::vector<uint8_t> bytes(header.size);
-    std::memcpy(bytes.data(), &header, sizeof(header));
-    if (payload_size > 0) std::memcpy(bytes.data() + sizeof(header), payload, payload_size);
-    return bytes;
+    return request_bytes<fci::MessageHeader>(command_code, next_id_++, payload, payload_size);
   }
   template <typename Payload>
   bool send(Command command, const Payload& payload) {
@@ -454,13 +460,7 @@ class DeviceClient {
 
   template <typename Payload>
   bool send(uint16_t command, const Payload* payload, std::size_t payload_size) {
-    fci::GripperMessageHeader header;
-    header.command = command;
-    header.command_id = next_id_++;
-    header.size = static_cast<uint32_t>(sizeof(header) + payload_size);
-    std::vector<uint8_t> bytes(header.size);
-    std::memcpy(bytes.data(), &header, sizeof(header));
-    if (payload_size > 0) std::memcpy(bytes.data() + sizeof(header), payload, payload_size);
+    const std::vector<uint8_t> bytes = request_bytes<fci::GripperMessageHeader>(command, next_id_++, payload, payload_size);
     return server_.receive_tcp(bytes.data(), bytes.size());
   }
   bool connect(uint16_t version) {
