@@ -9,15 +9,15 @@
 #include <string>
 #include <vector>
 
+#include "csp/fci/protocol.hpp"
+
 namespace csp::fci {
 
 // A request's fixed-size payload (packed, possibly unaligned in the buffer). Callers that read its
 // arrays hold it as `alignas(8)`: every request's doubles lie at multiples of 8 in it.
 template <typename T>
 T read_payload(const uint8_t* payload) {
-  T value;
-  std::memcpy(&value, payload, sizeof(T));
-  return value;
+  return unaligned_field<T>(payload, 0);
 }
 
 // Appends `data` to `buffer` and hands over every complete message. `problem(header)` names what

@@ -109,7 +109,13 @@ constexpr std::array<rt::Error, rt::kNumErrors> kWireErrorOrder = {
 }  // namespace
 
 int wire_error_index(rt::Error error) {
-  return static_cast<int>(std::find(kWireErrorOrder.begin(), kWireErrorOrder.end(), error) - kWireErrorOrder.begin());
+  // The inverse of kWireErrorOrder, made once: every state packet asks for all 41 flags.
+  static const std::array<int, rt::kNumErrors> index = [] {
+    std::array<int, rt::kNumErrors> inverse{};
+    for (int wire = 0; wire < rt::kNumErrors; ++wire) inverse[static_cast<std::size_t>(kWireErrorOrder[wire])] = wire;
+    return inverse;
+  }();
+  return index[static_cast<std::size_t>(error)];
 }
 
 const char* command_name(Command command) {
