@@ -492,6 +492,25 @@ JointLog slice(const JointLog& log, double t_begin, double t_end) {
   return part;
 }
 
+std::vector<NumericColumn> numeric_columns(const JointLog& log) {
+  std::vector<NumericColumn> columns;
+  for (const ColumnGroup& group : kJointLogSchema) {
+    if (group.text || rows_of(log, group) != log.size() || log.size() == 0) continue;   // text, or absent
+    with_series(log, group, [&](const auto& series) {
+      for (int j = 0; j < group.width; ++j) {
+        NumericColumn& column = columns.emplace_back(NumericColumn{column_name(group, j), {}});
+        column.values.reserve(series.size());
+        for (const auto& value : series) {
+          if constexpr (!std::is_same_v<std::decay_t<decltype(value)>, std::string>)   // text groups were left out
+            column.values.push_back(element_number(value, j));
+        }
+      }
+    });
+  }
+  for (const ExtensionColumn& extension : log.extensions) columns.push_back({extension.name, extension.values});
+  return columns;
+}
+
 void append_rows(JointLog& log, const JointLog& part, double time_shift) {
   const std::size_t first = log.size();
   for (const ColumnGroup& group : kJointLogSchema)

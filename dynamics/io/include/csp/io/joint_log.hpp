@@ -215,6 +215,15 @@ void check_joint_log(const JointLog& log);
 // The rows with t in [t_begin, t_end), every group and extension.
 JointLog slice(const JointLog& log, double t_begin, double t_end);
 
+// The numeric columns `log` has, in schema order then its extensions: each column's name (as in
+// the CSV header) and its values, one per row. For readers that treat every column alike (csp view's
+// plots, MCAP's joint states); text columns (robot_mode, current_errors) are left out.
+struct NumericColumn {
+  std::string name;
+  std::vector<double> values;
+};
+std::vector<NumericColumn> numeric_columns(const JointLog& log);
+
 // Appends the rows of `part` (with the same groups and extensions as `log`, e.g. a slice of the
 // same log) to `log`, their time moved back by `time_shift`.
 void append_rows(JointLog& log, const JointLog& part, double time_shift);
