@@ -87,8 +87,17 @@ void ScenarioArguments::add_to(CLI::App& command, const std::string& clock_help)
   command.add_option("--duration", duration, "Override the scenario's duration [s]");
 }
 
+std::string scenario_path(const std::string& given) {
+  if (given.empty()) return rt::default_scenario_path();
+  std::error_code error;
+  const std::string shipped = rt::shipped_scenario_path(given);
+  if (!std::filesystem::exists(given, error) && std::filesystem::is_regular_file(shipped, error))
+    return shipped;
+  return given;
+}
+
 rt::Scenario ScenarioArguments::load() const {
-  rt::Scenario s = rt::load_scenario(scenario.empty() ? rt::default_scenario_path() : scenario);
+  rt::Scenario s = rt::load_scenario(scenario_path(scenario));
   if (duration) {
     if (!(*duration > 0.0) || !(*duration <= rt::kMaxDuration))
       throw UsageError("--duration: expected a positive number of seconds, at most a year (" + std::to_string(static_cast<int64_t>(rt::kMaxDuration)) + ")");

@@ -38,6 +38,10 @@ struct ModelArguments {
   Model build() const;
 };
 
+// A scenario as a user names it: a file, or where no such file is, a shipped scenario's name
+// ("default", "medical/ultrasound_abdomen_scan": configs/scenarios/NAME.yaml); the default if empty.
+std::string scenario_path(const std::string& given);
+
 // The scenario options shared by `csp emulate` and `csp serve`: [SCENARIO] --clock --duration.
 struct ScenarioArguments {
   std::string scenario;   // empty: configs/scenarios/default.yaml

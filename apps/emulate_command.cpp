@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "progress.hpp"
+#include "view_option.hpp"
 #include "csp/io/svg_plot.hpp"
 #include "csp/run/observers.hpp"
 #include "csp/run/sources.hpp"
@@ -23,6 +24,7 @@ struct EmulateArguments {
   std::string lcm_log;
   std::string report;   // medical scenarios: the figures' directory
   bool progress = false;
+  ViewOption view;
 };
 
 // The tracking summary: RMS and max error of q against the scenario's trajectory, and the largest
@@ -86,6 +88,9 @@ int run_emulate(const EmulateArguments& args) {
               scenario.name.c_str(), scenario.path.c_str(), scenario.robot_file.c_str(), rt::clock_name(scenario.clock),
               scenario.duration, static_cast<unsigned long long>(scenario.seed), scenario.controller.type.c_str(),
               rt::control_mode_name(controller.controller().mode));
+  const std::unique_ptr<LiveViewSession> live_view = start_live_view(args.view, run, "csp emulate " + scenario.name);
+  // A live view waits for its page: the run is shown from its first cycle.
+  if (live_view) live_view->wait_for_page(stop_on_signals());
   // Ctrl-C (or SIGTERM) and a log that cannot be written end the motion as its duration would:
   // the robot holds, the summary is printed, the logs end with whole rows and events.
   const run::RunResult result = run.run(controller, &stop_on_signals());
@@ -115,6 +120,12 @@ int run_emulate(const EmulateArguments& args) {
   if (lcm_log) std::printf("  LCM log: %s (%llu events)\n", args.lcm_log.c_str(), static_cast<unsigned long long>(lcm_log->events()));
 
   const rt::RobotState& state = run.emulator().state();
+  if (live_view) {
+    const std::string how = controller.reflex() ? "reflex: " + run.emulator().reflex_reason()
+                                                : (result.stopped ? "stopped" : "finished without reflex");
+    live_view->finish(run, format("%s at t = %.3f s", how.c_str(), state.time.toSec()), log_failure.empty() ? args.log : "");
+    if (!result.stopped) live_view->serve_until_signal();
+  }
   if (const std::optional<int> status = print_early_end(log_failure, result.stopped, state.time.toSec(), 130))
     return *status;
   if (controller.reflex() || state.robot_mode == rt::RobotMode::kReflex) {
@@ -136,6 +147,7 @@ Command add_emulate_command(CLI::App& app) {
   cmd->add_option("--lcm-log", args->lcm_log, "Record the run as an LCM log (csp replay, csp log export, lcm-spy)");
   cmd->add_option("--report", args->report, "Medical scenarios: write force, path and penetration figures (SVG) into this directory");
   add_progress_flag(*cmd, args->progress);
+  args->view.add_to(*cmd);
   return [args] { return run_emulate(*args); };
 }
 

@@ -36,12 +36,6 @@ Aabb grown(Aabb box, const Vector3& amplitude) {
   return box;
 }
 
-Capsule shifted(Capsule c, const Vector3& by) {
-  c.a += by;
-  c.b += by;
-  return c;
-}
-
 // A contact's motion relative to the surface at joint velocity v: the separating speed u (along
 // the normal) and the slip w (in the tangent plane).
 struct RelativeMotion {

@@ -23,6 +23,13 @@ struct Capsule {
   double radius = 0.0;
 };
 
+// The capsule moved by `by` (a moving obstacle's displacement taken off the capsule instead).
+inline Capsule shifted(Capsule c, const Vector3& by) {
+  c.a += by;
+  c.b += by;
+  return c;
+}
+
 struct Sphere {
   Vector3 center = Vector3::Zero();
   double radius = 0.0;
