@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "csp/io/svg_plot.hpp"
@@ -253,20 +254,22 @@ TEST(SvgPlot, ShippedCommandsFiguresAreLaidOut) {
   const fs::path dir = fs::temp_directory_path() / csp::format("csp_svg_plot_%d", static_cast<int>(::getpid()));
   fs::remove_all(dir);
   const std::string csp = CSP_EXECUTABLE, source = CSP_SOURCE_DIR;
-  auto run = [&](const std::string& arguments) {
+  auto run = [&](const std::string& arguments, int exit_code = 0) {
     const std::string command = "cd " + source + " && " + csp + " " + arguments + " > /dev/null 2>&1";
-    EXPECT_EQ(std::system(command.c_str()), 0) << command;
+    const int status = std::system(command.c_str());
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == exit_code) << command;
   };
-  run("emulate default --duration 3 --report " + (dir / "emulate").string());
+  run("emulate configs/scenarios/default.yaml --duration 3 --report " + (dir / "emulate").string());
   run("emulate configs/scenarios/medical/laparoscopic_pivoting.yaml --duration 2 --report " + (dir / "medical").string());
   run("workspace --samples 20000 --out " + (dir / "workspace").string());
   run("plan check configs/scenarios/medical/plans/ultrasound_abdomen/trajectory.csv --scene ultrasound_abdomen "
-      "--robot panda --out " + (dir / "plan").string());
+      "--robot panda --out " + (dir / "plan").string(),
+      1);   // the scan presses its probe on the patient: a failed clearance check, figures written
 
   const std::vector<std::string> emulate_set{"joint_positions.svg", "tracking_error.svg", "joint_torques.svg",
                                              "limits.svg", "ee_path.svg"};
   for (const std::string& name : emulate_set) EXPECT_TRUE(fs::exists(dir / "emulate" / name)) << name;
-  for (const std::string& name : {"joint_positions.svg", "joint_torques.svg", "limits.svg", "ee_path.svg", "force.svg",
+  for (const char* name : {"joint_positions.svg", "joint_torques.svg", "limits.svg", "ee_path.svg", "force.svg",
                                   "path.svg", "penetration.svg"})
     EXPECT_TRUE(fs::exists(dir / "medical" / name)) << name;
   EXPECT_FALSE(fs::exists(dir / "medical" / "tracking_error.svg"));   // a task, not a joint trajectory

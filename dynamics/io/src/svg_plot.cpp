@@ -154,7 +154,10 @@ std::string render_heat_map(const HeatMapFigure& f) {
   auto py = [&](double y) { return kMapTop + (y1 - y) * scale; };
   const double bar_x = kMapLeft + width + 26, bar_w = 16;
   const double legend_y = kMapTop + height + 70;
-  const double total_w = std::max(bar_x + bar_w + 80, min_width), total_h = legend_y + (f.circles.empty() ? 0 : 22);
+  // The colour bar's label after its widest tick label (the largest count, or 1000).
+  const double colour_label_x =
+      bar_x + bar_w + 7 + std::max(estimated_text_width(std::to_string(max_count), 12), estimated_text_width("1000", 12)) + 14;
+  const double total_w = std::max(colour_label_x + 10, min_width), total_h = legend_y + (f.circles.empty() ? 0 : 22);
   const int decimals = decimals_for(step);
 
   std::ostringstream s;
@@ -260,7 +263,7 @@ std::string render_heat_map(const HeatMapFigure& f) {
   }
   if (max_count > 1 && std::log(static_cast<double>(max_count) / last_power) > 0.12 * std::log(static_cast<double>(max_count)))
     bar_tick(static_cast<double>(max_count), std::to_string(max_count));
-  const double colour_label_x = bar_x + bar_w + 62, colour_label_y = kMapTop + height / 2;
+  const double colour_label_y = kMapTop + height / 2;
   s << text_element(colour_label_x, colour_label_y, 12, "middle", f.colour_label,
                     format(" transform='rotate(-90 %.1f %.1f)'", colour_label_x, colour_label_y));
 
@@ -375,8 +378,14 @@ double render_panel(std::ostream& svg, const PlotPanel& panel, double x0, double
     values.push_back(!std::isfinite(v) ? "n/a" : format("%.0f %%%s", 100.0 * v / panel.bar_limit, v > panel.bar_limit ? " over" : ""));
     right = std::max(right, estimated_text_width(values.back(), kTickFont) + 12);
   }
+  // The last x tick label is centred on the axis' end: the right margin holds its half.
+  Ticks x_ticks = axis_ticks(b.x_min * scale, b.x_max * scale, kPanelWidth - left - right, limit ? " %" : "", true);
+  const double half_label = estimated_text_width(x_ticks.labels.back(), kTickFont) / 2 + 2;
+  if (half_label > right) {
+    right = half_label;
+    x_ticks = axis_ticks(b.x_min * scale, b.x_max * scale, kPanelWidth - left - right, limit ? " %" : "", true);
+  }
   const double plot_left = x0 + left, plot_width = kPanelWidth - left - right;
-  const Ticks x_ticks = axis_ticks(b.x_min * scale, b.x_max * scale, plot_width, limit ? " %" : "", true);
 
   auto px = [&](double x) { return plot_left + (x - b.x_min) / (b.x_max - b.x_min) * plot_width; };
   auto py = [&](double y) { return plot_bottom - (y - b.y_min) / (b.y_max - b.y_min) * plot_height; };
