@@ -48,8 +48,9 @@ std::vector<Element> parse_svg(const std::string& xml, const std::string& what) 
   while (i < xml.size()) {
     const std::size_t lt = xml.find('<', i);
     const std::string between = xml.substr(i, lt == std::string::npos ? std::string::npos : lt - i);
-    const std::regex bare_ampersand("&(?!(amp|lt|gt|quot|apos);)");
-    EXPECT_FALSE(std::regex_search(between, bare_ampersand)) << what << ": a bare '&' in text";
+    for (std::size_t amp = between.find('&'); amp != std::string::npos; amp = between.find('&', amp + 1))
+      EXPECT_TRUE(std::regex_search(between.substr(amp, 6), std::regex("^&(amp|lt|gt|quot|apos);")))
+          << what << ": a bare '&' in text";
     if (!open.empty() && open.back() == "text" && !elements.empty()) elements.back().text += unescape(between);
     if (lt == std::string::npos) {
       EXPECT_TRUE(between.find_first_not_of(" \n") == std::string::npos) << what << ": text after the root";
@@ -74,12 +75,19 @@ std::vector<Element> parse_svg(const std::string& xml, const std::string& what) 
       Element e;
       std::istringstream in(tag);
       in >> e.name;
-      const std::regex attribute(R"re(\s*([A-Za-z_:][-A-Za-z0-9_:.]*)=("([^"<]*)"|'([^'<]*)')\s*)re");
+      // name="value" or name='value', separated by white space.
       std::string rest = tag.substr(e.name.size());
-      std::smatch m;
-      while (std::regex_search(rest, m, attribute) && m.position() == 0) {
-        e.attributes[m[1]] = unescape(m[3].matched ? m[3].str() : m[4].str());
-        rest = m.suffix();
+      for (std::size_t at = rest.find_first_not_of(" \n"); at != std::string::npos;
+           at = rest.find_first_not_of(" \n")) {
+        const std::size_t equals = rest.find('=', at);
+        if (equals == std::string::npos || equals + 1 >= rest.size() || (rest[equals + 1] != '"' && rest[equals + 1] != '\''))
+          break;
+        const std::size_t close = rest.find(rest[equals + 1], equals + 2);
+        if (close == std::string::npos) break;
+        const std::string value = rest.substr(equals + 2, close - equals - 2);
+        EXPECT_EQ(value.find('<'), std::string::npos) << what;
+        e.attributes[rest.substr(at, equals - at)] = unescape(value);
+        rest = rest.substr(close + 1);
       }
       EXPECT_TRUE(rest.find_first_not_of(" \n") == std::string::npos) << what << ": cannot read <" << tag << ">";
       if (open.empty()) ++roots;
