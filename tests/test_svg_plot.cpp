@@ -256,7 +256,7 @@ TEST(SvgPlot, HeatMapTextsFit) {
   expect_laid_out(csp::render_heat_map(f), "heat map");
 }
 
-// The figures the shipped commands write: `csp emulate default --report` (the set), a medical
+// The figures the shipped commands write: `csp emulate` of the default scenario (the set), a medical
 // scenario's, `csp workspace`'s and `csp plan check`'s.
 TEST(SvgPlot, ShippedCommandsFiguresAreLaidOut) {
   const fs::path dir = fs::temp_directory_path() / csp::format("csp_svg_plot_%d", static_cast<int>(::getpid()));
