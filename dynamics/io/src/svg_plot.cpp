@@ -329,6 +329,15 @@ Bounds data_bounds(const PlotPanel& panel) {
   if (y.min > y.max) y = {0.0, 1.0};
   if (!(x.max > x.min)) x.max = x.min + 1.0;
   if (!(y.max > y.min)) y.max = y.min + 1.0;
+  if (panel.bar_labels.empty()) {
+    // Lines keep off the frame (a limit drawn as a line stays visible), and an axis that ends just
+    // short of a tick (a time axis from the first 1 ms cycle) reaches it.
+    const double pad = 0.04 * (y.max - y.min);
+    y = {y.min - pad, y.max + pad};
+    const double step = nice_step((x.max - x.min) / 5.0), near = 0.03 * (x.max - x.min);
+    if (x.min - std::floor(x.min / step) * step < near) x.min = std::floor(x.min / step) * step;
+    if (std::ceil(x.max / step) * step - x.max < near) x.max = std::ceil(x.max / step) * step;
+  }
   return {x.min, x.max, y.min, y.max};
 }
 
@@ -356,7 +365,10 @@ double render_panel(std::ostream& svg, const PlotPanel& panel, double x0, double
   const bool limit = bars && panel.bar_limit > 0.0;
   const Bounds b = data_bounds(panel);
   const std::size_t n_bars = panel.bar_labels.size();
-  const double plot_height = bars ? std::max(kPlotHeight, 15.0 * static_cast<double>(n_bars)) : kPlotHeight;
+  // Bars about 22 px apart, closer when many (down to 15 px, what a label needs), one alone not a block.
+  const double plot_height =
+      bars ? std::max(15.0 * static_cast<double>(n_bars), std::min(kPlotHeight, 22.0 * static_cast<double>(n_bars)) + 8)
+           : kPlotHeight;
 
   const FittedText title = fit_text(panel.title, kPanelTitleFont, kPanelWidth - 20);
   const double plot_top = y0 + 8 + write_lines(svg, title, x0 + kPanelWidth / 2, y0 + 6 + kPanelTitleFont, "middle") + 6;
