@@ -39,7 +39,7 @@ double nice_step(double raw) {
 
 constexpr int kLevels = 64;            // colour levels; few enough that runs of equal cells merge
 constexpr double kMaxPlotSize = 560;   // px, longer side of the plot area
-constexpr double kMapLeft = 80, kMapTop = 66;
+constexpr double kMapLeft = 80;
 constexpr const char* kFont = "DejaVu Sans, Helvetica, Arial, sans-serif";
 const std::string kHalo = " stroke='white' stroke-width='3' paint-order='stroke'";   // legible over the map
 
@@ -146,14 +146,14 @@ std::string render_heat_map(const HeatMapFigure& f) {
   const double min_width = 800.0;
   const FittedText title = fit_text(f.title, 17, min_width - kMapLeft - 10);
   const FittedText subtitle = fit_text(f.subtitle, 12, min_width - kMapLeft - 10);
-  const double kMapTop = 12 + line_height(title.size) * static_cast<double>(title.lines.size()) +
+  const double map_top = 12 + line_height(title.size) * static_cast<double>(title.lines.size()) +
                          line_height(subtitle.size) * static_cast<double>(subtitle.lines.size()) + 10;
   const double scale = kMaxPlotSize / std::max(x1 - x0, y1 - y0);   // px per data unit, equal on both axes
   const double width = (x1 - x0) * scale, height = (y1 - y0) * scale;
   auto px = [&](double x) { return kMapLeft + (x - x0) * scale; };
-  auto py = [&](double y) { return kMapTop + (y1 - y) * scale; };
+  auto py = [&](double y) { return map_top + (y1 - y) * scale; };
   const double bar_x = kMapLeft + width + 26, bar_w = 16;
-  const double legend_y = kMapTop + height + 70;
+  const double legend_y = map_top + height + 70;
   // The colour bar's label after its widest tick label (the largest count, or 1000).
   const double colour_label_x =
       bar_x + bar_w + 7 + std::max(estimated_text_width(std::to_string(max_count), 12), estimated_text_width("1000", 12)) + 14;
@@ -219,16 +219,16 @@ std::string render_heat_map(const HeatMapFigure& f) {
   }
 
   // Frame, ticks and labels.
-  s << "<rect x=\"" << number(kMapLeft, 1) << "\" y=\"" << number(kMapTop, 1) << "\" width=\"" << number(width, 1)
+  s << "<rect x=\"" << number(kMapLeft, 1) << "\" y=\"" << number(map_top, 1) << "\" width=\"" << number(width, 1)
     << "\" height=\"" << number(height, 1) << "\" fill=\"none\" stroke=\"black\"/>\n";
   // Every tick labelled, or every other one when the labels would touch.
   const int label_every = estimated_text_width(number(-std::max(std::abs(x0), std::abs(x1)), decimals), 13) + 6 > step * scale ? 2 : 1;
   for (double v = std::ceil(x0 / step - 1e-9) * step; v <= x1 + 1e-9 * step; v += step) {
     const double x = px(v), value = std::abs(v) < 1e-9 * step ? 0.0 : v;
-    s << "<line x1=\"" << number(x, 1) << "\" y1=\"" << number(kMapTop + height, 1) << "\" x2=\"" << number(x, 1)
-      << "\" y2=\"" << number(kMapTop + height + 5, 1) << "\" stroke=\"black\"/>";
+    s << "<line x1=\"" << number(x, 1) << "\" y1=\"" << number(map_top + height, 1) << "\" x2=\"" << number(x, 1)
+      << "\" y2=\"" << number(map_top + height + 5, 1) << "\" stroke=\"black\"/>";
     if (std::lround(v / step) % label_every == 0)
-      s << text_element(x, kMapTop + height + 19, 13, "middle", number(value, decimals));
+      s << text_element(x, map_top + height + 19, 13, "middle", number(value, decimals));
   }
   for (double v = std::ceil(y0 / step - 1e-9) * step; v <= y1 + 1e-9 * step; v += step) {
     const double y = py(v), value = std::abs(v) < 1e-9 * step ? 0.0 : v;
@@ -236,22 +236,22 @@ std::string render_heat_map(const HeatMapFigure& f) {
       << "\" y2=\"" << number(y, 1) << "\" stroke=\"black\"/>"
       << text_element(kMapLeft - 8, y + 4, 13, "end", number(value, decimals));
   }
-  s << text_element(kMapLeft + width / 2, kMapTop + height + 42, 13, "middle", f.x_label)
-    << text_element(kMapLeft - 52, kMapTop + height / 2, 13, "middle", f.y_label,
-                    format(" transform='rotate(-90 %.1f %.1f)'", kMapLeft - 52, kMapTop + height / 2));
+  s << text_element(kMapLeft + width / 2, map_top + height + 42, 13, "middle", f.x_label)
+    << text_element(kMapLeft - 52, map_top + height / 2, 13, "middle", f.y_label,
+                    format(" transform='rotate(-90 %.1f %.1f)'", kMapLeft - 52, map_top + height / 2));
 
   // Colour bar: the same levels as the map, log10 ticks at powers of ten.
   const double level_h = height / kLevels;
   s << "<g shape-rendering=\"crispEdges\">";
   for (int level = 0; level < kLevels; ++level)
-    s << "<rect x=\"" << number(bar_x, 1) << "\" y=\"" << number(kMapTop + height - (level + 1) * level_h, 2)
+    s << "<rect x=\"" << number(bar_x, 1) << "\" y=\"" << number(map_top + height - (level + 1) * level_h, 2)
       << "\" width=\"" << number(bar_w, 0) << "\" height=\"" << number(level_h + 0.3, 2) << "\" fill=\""
       << level_colour(level) << "\"/>";
-  s << "</g>\n<rect x=\"" << number(bar_x, 1) << "\" y=\"" << number(kMapTop, 1) << "\" width=\"" << number(bar_w, 0)
+  s << "</g>\n<rect x=\"" << number(bar_x, 1) << "\" y=\"" << number(map_top, 1) << "\" width=\"" << number(bar_w, 0)
     << "\" height=\"" << number(height, 1) << "\" fill=\"none\" stroke=\"black\"/>\n";
   auto bar_tick = [&](double count, const std::string& label) {
     const double t = max_count > 1 ? std::log(count) / std::log(static_cast<double>(max_count)) : 1.0;
-    const double y = kMapTop + height * (1 - t);
+    const double y = map_top + height * (1 - t);
     s << "<line x1=\"" << number(bar_x + bar_w, 1) << "\" y1=\"" << number(y, 1) << "\" x2=\""
       << number(bar_x + bar_w + 4, 1) << "\" y2=\"" << number(y, 1) << "\" stroke=\"black\"/>"
       << text_element(bar_x + bar_w + 7, y + 4, 12, "start", label);
@@ -263,7 +263,7 @@ std::string render_heat_map(const HeatMapFigure& f) {
   }
   if (max_count > 1 && std::log(static_cast<double>(max_count) / last_power) > 0.12 * std::log(static_cast<double>(max_count)))
     bar_tick(static_cast<double>(max_count), std::to_string(max_count));
-  const double colour_label_y = kMapTop + height / 2;
+  const double colour_label_y = map_top + height / 2;
   s << text_element(colour_label_x, colour_label_y, 12, "middle", f.colour_label,
                     format(" transform='rotate(-90 %.1f %.1f)'", colour_label_x, colour_label_y));
 
@@ -285,7 +285,7 @@ namespace {
 // --- Panels --------------------------------------------------------------------------------------
 
 // Axis ticks at a nice step: the first of 1, 2, 5 x 10^k (from about five ticks on) whose labels
-// have room, measured by `extent` (a label's width along the axis, or its height).
+// have room along the axis: their estimated width on a horizontal axis, their height on a vertical one.
 struct Ticks {
   std::vector<double> values;
   std::vector<std::string> labels;
