@@ -241,6 +241,34 @@ TEST(SvgPlot, LongTextsWrapAndNothingOverlaps) {
   expect_laid_out(csp::render_panels(csp::format("%s %s", title.c_str(), title.c_str()), {bars}, 1), "bars");
 }
 
+// A long run's time series: a few points per pixel column, its peaks kept (a spike of one sample).
+TEST(SvgPlot, DenseTimeSeriesKeepsItsPeaks) {
+  csp::PlotSeries series{"", "#1f77b4", {}, {}};
+  for (int k = 0; k < 100000; ++k) series.x.push_back(1e-3 * k), series.y.push_back(std::sin(1e-3 * k));
+  series.y[61234] = 5.0, series.y[7000] = -3.0;
+  const std::string svg = csp::render_panels("dense", {{"one", "t [s]", "y", {series}, {}}}, 1);
+  const std::vector<Element> all = parse_svg(svg, "dense");
+  const std::vector<Element> lines = elements_named(all, "polyline"), frames = elements_named(all, "rect");
+  ASSERT_EQ(lines.size(), 1u);
+  const Element& frame = frames.back();   // after the background
+  std::istringstream points(lines[0].attributes.at("points"));
+  double x = 0.0, y = 0.0, top = HUGE_VAL, bottom = -HUGE_VAL, top_x = 0.0, bottom_x = 0.0;
+  std::size_t count = 0;
+  for (char comma; points >> x >> comma >> y; ++count) {
+    if (y < top) top = y, top_x = x;
+    if (y > bottom) bottom = y, bottom_x = x;
+  }
+  const double left = number_attribute(frame, "x"), width = number_attribute(frame, "width");
+  const double frame_top = number_attribute(frame, "y"), height = number_attribute(frame, "height");
+  EXPECT_LE(count, static_cast<std::size_t>(2 * (width + 2)));
+  // The axis spans [-3, 5] padded by 4 % each side; the spike at 5 and the dip at -3 are drawn there.
+  const double span = 8.0 * 1.08;
+  EXPECT_NEAR(top, frame_top + height * (0.04 * 8.0) / span, 0.11);
+  EXPECT_NEAR(bottom, frame_top + height * (1.0 - 0.04 * 8.0 / span), 0.11);
+  EXPECT_NEAR(top_x, left + width * 61.234 / 100.0, 1.0);   // the x axis reaches the tick at 100 s
+  EXPECT_NEAR(bottom_x, left + width * 7.0 / 100.0, 1.0);
+}
+
 TEST(SvgPlot, HeatMapTextsFit) {
   csp::HeatMapFigure f;
   f.title = "panda workspace, side view: end effector (a gripper with a long name) position, seen from the side";

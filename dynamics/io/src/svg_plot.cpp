@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
+#include <utility>
 #include <cctype>
 
 namespace csp {
@@ -308,6 +309,32 @@ Ticks axis_ticks(double lo, double hi, double length_px, const std::string& suff
 
 bool finite_point(const PlotSeries& s, std::size_t i) { return std::isfinite(s.x[i]) && std::isfinite(s.y[i]); }
 
+// A line's points in pixels. A time series (x never decreasing) denser than the pixels keeps, per
+// pixel column, its lowest and highest point in their order: the same picture, peaks included, in
+// a file of a few thousand points however long the run.
+std::vector<std::pair<double, double>> polyline_points(const PlotSeries& s, const auto& px, const auto& py) {
+  std::vector<std::pair<double, double>> all;
+  bool time_series = true;
+  for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i)
+    if (finite_point(s, i)) {
+      time_series = time_series && (all.empty() || px(s.x[i]) >= all.back().first);
+      all.emplace_back(px(s.x[i]), py(s.y[i]));
+    }
+  if (!time_series || all.size() < 2000) return all;
+  std::vector<std::pair<double, double>> kept;
+  for (std::size_t begin = 0; begin < all.size();) {
+    std::size_t end = begin, low = begin, high = begin;
+    for (; end < all.size() && std::floor(all[end].first) == std::floor(all[begin].first); ++end) {
+      if (all[end].second > all[low].second) low = end;   // pixels: y grows downwards
+      if (all[end].second < all[high].second) high = end;
+    }
+    kept.push_back(all[std::min(low, high)]);
+    if (low != high) kept.push_back(all[std::max(low, high)]);
+    begin = end;
+  }
+  return kept;
+}
+
 struct Bounds {
   double x_min, x_max, y_min, y_max;
 };
@@ -454,8 +481,7 @@ double render_panel(std::ostream& svg, const PlotPanel& panel, double x0, double
                           s.colour.c_str());
       } else {
         svg << "<polyline fill='none' stroke-width='1' stroke='" << s.colour << "' points='";
-        for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i)
-          if (finite_point(s, i)) svg << format("%.1f,%.1f ", px(s.x[i]), py(s.y[i]));
+        for (const auto& [x, y] : polyline_points(s, px, py)) svg << format("%.1f,%.1f ", x, y);
         svg << "'/>\n";
       }
       if (!s.label.empty()) legend.push_back(s);
