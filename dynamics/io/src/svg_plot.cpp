@@ -285,7 +285,7 @@ namespace {
 
 // --- Panels --------------------------------------------------------------------------------------
 
-// Axis ticks at a nice step: the first of 1, 2, 5 x 10^k (from about five ticks on) whose labels
+// Axis ticks at a nice step: the first of 1, 2, 5 x 10^k (from at most six ticks on) whose labels
 // have room along the axis: their estimated width on a horizontal axis, their height on a vertical one.
 struct Ticks {
   std::vector<double> values;
@@ -293,7 +293,7 @@ struct Ticks {
 };
 
 Ticks axis_ticks(double lo, double hi, double length_px, const std::string& suffix, bool along_width) {
-  for (double step = nice_step((hi - lo) / 5.0);; step = nice_step(step * 1.5)) {
+  for (double step = nice_step((hi - lo) / 6.0);; step = nice_step(step * 1.5)) {
     Ticks ticks;
     const int decimals = decimals_for(step);
     double extent = 0.0;
@@ -320,7 +320,8 @@ std::vector<std::pair<double, double>> polyline_points(const PlotSeries& s, cons
       time_series = time_series && (all.empty() || px(s.x[i]) >= all.back().first);
       all.emplace_back(px(s.x[i]), py(s.y[i]));
     }
-  if (!time_series || all.size() < 2000) return all;
+  if (!time_series || all.size() < 2 || static_cast<double>(all.size()) <= 2 * (all.back().first - all.front().first + 1))
+    return all;
   std::vector<std::pair<double, double>> kept;
   for (std::size_t begin = 0; begin < all.size();) {
     std::size_t end = begin, low = begin, high = begin;
