@@ -1,11 +1,13 @@
 // csp emulate: run a scenario on the emulated robot with its built-in controller and report the
-// tracking error, reflexes and timing; optionally write the per-cycle CSV log.
+// tracking error, reflexes and timing; optionally write the per-cycle CSV log and the figures.
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "progress.hpp"
@@ -17,12 +19,17 @@
 namespace csp::cli {
 namespace {
 
+// What --report may write (a scene's task: no tracking error, and its own three).
+const std::vector<std::string> kReportFigures{"joint_positions.svg", "tracking_error.svg", "joint_torques.svg",
+                                              "limits.svg",          "ee_path.svg",        "force.svg",
+                                              "path.svg",            "penetration.svg"};
+
 struct EmulateArguments {
   ScenarioArguments scenario;
   std::optional<long long> seed;
   std::string log;
   std::string lcm_log;
-  std::string report;   // medical scenarios: the figures' directory
+  std::string report;   // the figures' directory
   bool progress = false;
   ViewOption view;
 };
@@ -50,13 +57,11 @@ int run_emulate(const EmulateArguments& args) {
     scenario.emulator.seed = scenario.seed;
     scenario.command_faults.seed = scenario.seed + 1;
   }
-  if (!scenario.emulator.scene && !args.report.empty())
-    throw UsageError("--report: only for a scenario with a scene (configs/scenarios/medical/)");
   // Before the run and before any file is opened: a refused output leaves every file as it was.
   Outputs()
       .file("--log", args.log)
       .file("--lcm-log", args.lcm_log)
-      .directory("--report", args.report, {"force.svg", "path.svg", "penetration.svg"})
+      .directory("--report", args.report, kReportFigures)
       .input("the scenario", scenario.path)
       .input("the scenario's robot file", scenario.robot_file)
       .check();
@@ -73,8 +78,13 @@ int run_emulate(const EmulateArguments& args) {
   if (scenario.emulator.scene) {
     medical = std::make_unique<run::MedicalObserver>(run, controller.controller().status);
     run.observe(*medical);
-  } else {
-    tracking = std::make_unique<run::TrackingObserver>(run::scenario_reference(scenario, run.emulator()), run.emulator());
+  }
+  // A scene's task has no joint trajectory to track: its figures show the joints without one.
+  if (!scenario.emulator.scene || !args.report.empty()) {
+    tracking = std::make_unique<run::TrackingObserver>(
+        scenario.emulator.scene ? run::TrackingObserver::Reference{} : run::scenario_reference(scenario, run.emulator()),
+        run.emulator());
+    if (!args.report.empty()) tracking->keep_figures();
     run.observe(*tracking);
   }
   const std::unique_ptr<run::CsvLogObserver> log = run::observe_csv_log(run, args.log);
@@ -104,16 +114,19 @@ int run_emulate(const EmulateArguments& args) {
   std::printf("  ran %llu cycles (%.3f s), lost commands %llu (longest run %d)\n",
               static_cast<unsigned long long>(counters.motion_cycles), static_cast<double>(counters.motion_cycles) * 1e-3,
               static_cast<unsigned long long>(counters.lost_commands), counters.max_consecutive_lost);
-  if (tracking) print_tracking(*tracking);
+  if (tracking && !medical) print_tracking(*tracking);
   if (medical) {
     for (const rt::MedicalMetric& m : medical->recorder().metrics()) {
       if (std::isnan(m.value)) std::printf("  %-50s %10s\n", m.name.c_str(), "none");   // it did not happen
       else std::printf("  %-50s %10.3f %s\n", m.name.c_str(), m.value, m.unit.c_str());
     }
-    if (!args.report.empty()) {
-      medical->recorder().write_figures(args.report);
-      std::printf("  figures: %s/force.svg, path.svg, penetration.svg\n", args.report.c_str());
-    }
+    if (!args.report.empty()) medical->recorder().write_figures(args.report);
+  }
+  if (!args.report.empty()) {
+    tracking->write_figures(args.report, scenario.name);
+    std::printf("  figures in %s: joint_positions.svg,%s joint_torques.svg, limits.svg, ee_path.svg%s\n",
+                args.report.c_str(), medical ? "" : " tracking_error.svg,",
+                medical ? ", force.svg, path.svg, penetration.svg" : "");
   }
   print_timing(controller.motion().timing, "controller compute time");
   if (log) std::printf("  log: %s (%llu rows)\n", log->log().path().c_str(), static_cast<unsigned long long>(log->log().rows()));
@@ -145,7 +158,9 @@ Command add_emulate_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "Override the scenario's seed (sensor noise, command losses)");
   cmd->add_option("--log", args->log, "Write the per-cycle CSV log to this file");
   cmd->add_option("--lcm-log", args->lcm_log, "Record the run as an LCM log (csp replay, csp log export, lcm-spy)");
-  cmd->add_option("--report", args->report, "Medical scenarios: write force, path and penetration figures (SVG) into this directory");
+  cmd->add_option("--report", args->report,
+                  "Write the run's figures (SVG) into this directory: joint positions, tracking error, joint torques "
+                  "with their limits, limit usage, end-effector path; a scene's task adds force, path and penetration");
   add_progress_flag(*cmd, args->progress);
   args->view.add_to(*cmd);
   return [args] { return run_emulate(*args); };

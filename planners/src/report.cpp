@@ -213,15 +213,15 @@ void write_report(const std::string& dir, const PlanReport& r, const Scene& scen
       {"acceleration", &JointUsage::acceleration},             {"jerk", &JointUsage::jerk},
       {"torque", &JointUsage::torque},                         {"torque rate", &JointUsage::torque_rate}};
   for (const auto& [name, member] : kinds) {
-    PlotPanel p{name, "fraction of the limit", "", {{"", "#1f77b4", {}, {}}}, {}};
-    for (std::size_t j = 0; j < c.joints.size(); ++j) {
-      const double f = c.joints[j].*member;
-      p.series[0].y.push_back(std::isfinite(f) ? f : 0.0);
-      p.bar_labels.push_back(format("joint %zu: %.2f%s", j + 1, f, f > 1.0 ? " OVER" : ""));
-    }
-    usage.push_back(p);
+    std::vector<double> fractions;
+    for (const JointUsage& u : c.joints) fractions.push_back(u.*member);
+    usage.push_back(joint_limit_panel(name, fractions));
   }
-  write_text_file((folder / "limits.svg").string(), render_panels("Limit usage per joint (1 = the limit)", usage, 2));
+  PlotPanel power = joint_limit_panel("power (sum of the joints' positive powers)",
+                                      {c.power_limit > 0.0 ? c.peak_power / c.power_limit : NAN});
+  power.bar_labels = {"arm"};
+  usage.push_back(power);
+  write_text_file((folder / "limits.svg").string(), render_panels("Limit usage per joint", usage, 2));
 
   // Clearance over time: the smallest over all classes, the minimum of each stretch kept.
   PlotPanel clearance{"smallest clearance over all classes (distance - required)", "t [s]", "clearance [m]", {}, {}};

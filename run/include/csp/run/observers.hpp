@@ -5,6 +5,8 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
+#include <vector>
 #include <string>
 
 #include "csp/bridge/lcm_log.hpp"
@@ -55,11 +57,19 @@ class LcmLogObserver : public Observer {
 };
 
 // The measured q against a reference q_ref(t) (t: motion time [s]), joint by joint; with the peaks
-// of the estimated external torque and of the sensed torque against its limit.
+// of the estimated external torque and of the sensed torque against its limit. An empty reference
+// (a scene's task, not a joint trajectory) leaves the tracking error at zero.
 class TrackingObserver : public Observer {
  public:
   using Reference = std::function<Vector7(double t)>;
   TrackingObserver(Reference reference, const rt::Emulator& emulator);
+
+  // `csp emulate --report DIR`: keep every 10th state for the figures and each limit's peak use
+  // over every state; write_figures then writes joint_positions.svg, tracking_error.svg (with a
+  // reference), joint_torques.svg (tau_J with +-tau_max), limits.svg and ee_path.svg into
+  // `directory` (created), each titled after `name`.
+  void keep_figures() { keep_figures_ = true; }
+  void write_figures(const std::string& directory, const std::string& name) const;
   void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override;
 
   long cycles() const { return cycles_; }
@@ -77,6 +87,25 @@ class TrackingObserver : public Observer {
   Vector7 peak_tau_J_fraction_ = Vector7::Zero();
   long cycles_ = 0;
   double last_time_ = 0.0;
+
+  // The figures' record (keep_figures).
+  struct FigureSample {
+    double t;
+    Vector7 q, q_ref, tau_J;
+    Vector3 tcp;   // O_T_EE's origin [m]
+  };
+  void keep_limit_use(const rt::RobotState& state);
+  bool keep_figures_ = false;
+  JointLimits limits_;
+  std::vector<FigureSample> figure_samples_;
+  // Peak use of each limit, a fraction of it: the position of half the range from its middle;
+  // acceleration and jerk as backward differences of dq; torque rate of the commanded tau_J_d;
+  // power: joint_power(tau_J, dq) against power_max.
+  Vector7 position_use_ = Vector7::Zero(), velocity_use_ = Vector7::Zero(), acceleration_use_ = Vector7::Zero(),
+          jerk_use_ = Vector7::Zero(), torque_use_ = Vector7::Zero(), torque_rate_use_ = Vector7::Zero();
+  double power_use_ = 0.0;
+  std::optional<rt::RobotState> previous_;
+  std::optional<Vector7> previous_ddq_;
 };
 
 // The scenario's own trajectory from the pose the run starts in: what its built-in controller tracks.

@@ -21,6 +21,12 @@ std::string format(const char* pattern, auto... values) {
 // Writes `text` to `path`; throws std::runtime_error("cannot write <path>") on failure.
 void write_text_file(const std::string& path, const std::string& text);
 
+// The width [px] a line of text takes at `font_size` [px] in a sans-serif font (DejaVu Sans's
+// widths, rounded up): what the layout uses to keep labels apart and titles inside the figure.
+// Every <text> the renderer writes has its own x, y, font-size and text-anchor, so a reader of
+// the SVG can estimate each one's box the same way.
+double estimated_text_width(const std::string& text, double font_size);
+
 // --- Density heat maps: log-scaled counts on a viridis colour scale, axes with ticks, title,
 // colour bar, reference circles, markers and horizontal lines.
 
@@ -61,6 +67,8 @@ struct HeatMapFigure {
 std::string render_heat_map(const HeatMapFigure& figure);
 
 // --- Panels sharing one style, in a grid of `columns`: lines, points or horizontal bars.
+// The renderer lays out: long titles wrap (or shrink) to the figure's width, tick steps are
+// 1, 2 or 5 times a power of ten with room for their labels, legends sit under the axes.
 
 struct PlotSeries {
   std::string label, colour;
@@ -72,7 +80,15 @@ struct PlotPanel {
   std::string title, x_label, y_label;
   std::vector<PlotSeries> series;
   std::vector<std::string> bar_labels;   // non-empty: a bar chart, series[0].y the bar lengths
+  // A bar chart of usage against a limit (> 0): the axis ends at the limit (100 %), a line marks
+  // it, each bar's share of the limit is written after the axis, and bars beyond it end at the
+  // axis in red, marked "over".
+  double bar_limit = 0.0;
 };
+
+// The usage of one limit per joint (each value a fraction of its limit, 1 = the limit) as a limit
+// chart "joint 1" .. "joint n": `csp plan`'s and `csp emulate`'s limits.svg.
+PlotPanel joint_limit_panel(const std::string& title, const std::vector<double>& fractions);
 
 std::string render_panels(const std::string& title, const std::vector<PlotPanel>& panels, int columns);
 
