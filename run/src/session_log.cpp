@@ -5,6 +5,8 @@
 #include <sstream>
 
 #include "csp/bridge/csv_convert.hpp"
+#include "csp/io/mcap.hpp"
+#include "csp/run/mcap_export.hpp"
 
 namespace csp::run {
 namespace {
@@ -24,16 +26,21 @@ SessionRobot session_robot(const std::string& log_path, const std::string& state
   SessionRobot robot;
   robot.robot_file = given.robot_file;
   robot.end_effector = given.end_effector;
-  if (!bridge::is_lcm_log(log_path)) return robot;
-  const std::vector<scenario_t> records = bridge::outline(log_path).scenario_records;
-  const auto record = std::find_if(records.begin(), records.end(), [&](const scenario_t& r) {
-    return bridge::Channels(r.channel_prefix).state == state_channel;
-  });
-  if (record == records.end()) return robot;
+  std::vector<scenario_t> records;
+  if (mcap::is_mcap_file(log_path)) {
+    // An MCAP file CSP wrote holds one session, its record in "csp.session" (mcap_export.hpp).
+    if (std::optional<scenario_t> session = recorded_session(log_path)) records.push_back(*session);
+  } else if (bridge::is_lcm_log(log_path)) {
+    records = bridge::outline(log_path).scenario_records;
+    std::erase_if(records, [&](const scenario_t& r) { return bridge::Channels(r.channel_prefix).state != state_channel; });
+  }
+  if (records.empty()) return robot;
+  const auto record = records.begin();
 
   robot.recorded = std::make_unique<bridge::RecordedRobot>(*record);
   const bridge::RecordedRobot& recorded = *robot.recorded;
   robot.recorded_scenario = record->path;
+  robot.record = *record;
   if (!given.robot_file_given) {
     robot.robot_file = recorded.robot_file;
     robot.robot_file_recorded = true;
@@ -51,6 +58,7 @@ SessionRobot session_robot(const std::string& log_path, const std::string& state
 }
 
 JointLog read_joint_log(const std::string& path, const std::string& state_channel) {
+  if (mcap::is_mcap_file(path)) return read_joint_log_mcap(path);
   return bridge::is_lcm_log(path) ? bridge::read_joint_log_lcm(path, state_channel) : read_joint_log_csv(path);
 }
 
