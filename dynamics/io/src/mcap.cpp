@@ -323,7 +323,9 @@ class Cursor {
 
   KeyValues key_values(const char* what) {
     const uint32_t size = number<uint32_t>(what);
-    Cursor map(path_, bytes_, pos_, pos_ + take(size, what).size());
+    const uint64_t start = pos_;
+    take(size, what);
+    Cursor map(path_, bytes_, start, pos_);
     KeyValues values;
     while (!map.at_end()) {
       std::string key = map.text(what);
