@@ -2,16 +2,13 @@
 // for Foxglove and Rerun (docs/mcap.md).
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
-#include <sstream>
 
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 #include "csp/bridge/csv_convert.hpp"
-#include "csp/io/robot_config.hpp"
 #include "csp/run/mcap_export.hpp"
 #include "csp/run/session_log.hpp"
 
@@ -27,13 +24,6 @@ struct LogArguments {
   bool progress = false;
 };
 
-std::string file_text(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // `csp log export --format mcap`: the session's rows with the robot it recorded (or the one given)
 // for /tf, and the scene given or its recorded scenario's for /scene.
 int export_mcap(const LogArguments& args) {
@@ -45,37 +35,17 @@ int export_mcap(const LogArguments& args) {
   // The scene: the one given, else the recorded scenario's where its file is still there (a scenario
   // record holds the scenario's text, not its scene's). A recorded scene's tool is the robot's end effector.
   std::shared_ptr<const Scene> scene;
-  bool scene_tool = false;
   if (!args.scene.empty()) {
     scene = std::make_shared<Scene>(load_scene(args.scene));
   } else if (robot.recorded && robot.record.text.find("scene:") != std::string::npos) {
     try {
       scene = rt::load_scenario(robot.recorded_scenario).emulator.scene;
-      scene_tool = robot.recorded->scene_tool;
     } catch (const std::exception& e) {
       std::cerr << "csp log export: " << args.input << ": no /scene: the recorded scenario cannot be loaded (give --scene): "
                 << e.what() << "\n";
     }
   }
-  const RobotConfig config = load_robot_config(robot.robot_file);
-  ModelOptions options;
-  options.end_effector = robot.end_effector;
-  ModelParameters parameters = model_parameters(config, options);
-  if (scene_tool) parameters = with_tool(parameters, scene->tool);
-  const Model model(parameters);
-
-  run::McapSession session;
-  session.model = &model;
-  session.robot_name = config.name;
-  session.scene = scene.get();
-  if (robot.recorded) {
-    session.record = robot.record;
-  } else {   // a CSV joint log: the robot it was exported with, as a scenario record would name it
-    session.record.path = "csp log export " + args.input;
-    session.record.text = "end_effector: " + robot.end_effector + "\n";
-    session.record.robot_path = robot.robot_file;
-    session.record.robot_text = file_text(robot.robot_file);
-  }
+  const run::McapSession session = run::mcap_session(robot, scene);
   const run::McapExportReport r = run::write_session_mcap(args.out, log, session);
   std::printf("csp log export: %llu rows to %s (/joint_states, /tf%s, /errors: %llu messages)\n",
               static_cast<unsigned long long>(r.rows), args.out.c_str(),

@@ -11,7 +11,6 @@
 
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/io/mcap.hpp"
-#include "csp/io/robot_config.hpp"
 #include "csp/run/mcap_export.hpp"
 #include "csp/run/observers.hpp"
 #include "csp/run/session_log.hpp"
@@ -277,11 +276,13 @@ TEST(McapContainer, RefusesWhatIsNoMcapFile) {
 
 const std::string kScene = std::string(CSP_SOURCE_DIR) + "/configs/scenes/ultrasound_abdomen.yaml";
 
-// One short run of the default scenario (a Panda with the Franka Hand) as `csp emulate --log` and
+const std::string kUltrasoundScenario = std::string(CSP_SOURCE_DIR) + "/configs/scenarios/medical/ultrasound_abdomen_scan.yaml";
+
+// One short run of a scenario (by default a Panda with the Franka Hand) as `csp emulate --log` and
 // `--lcm-log` write it.
 struct RecordedSession {
-  RecordedSession() {
-    scenario = rt::load_scenario(test::kDefaultScenario);
+  explicit RecordedSession(const std::string& scenario_path = test::kDefaultScenario) {
+    scenario = rt::load_scenario(scenario_path);
     scenario.duration = 0.2;
     run::Run run(scenario);
     run::ControllerSource controller(run);
@@ -301,21 +302,9 @@ struct RecordedSession {
 };
 
 // The session's mapping with the robot it recorded.
-struct Export {
-  explicit Export(const RecordedSession& session, const Scene* scene = nullptr)
-      : robot(run::session_robot(session.lcm_log, "CSP_STATE", {})),
-        config(load_robot_config(robot.robot_file)),
-        model(model_parameters(config, {.end_effector = robot.end_effector})) {
-    mapping.model = &model;
-    mapping.robot_name = config.name;
-    mapping.scene = scene;
-    mapping.record = robot.record;
-  }
-  run::SessionRobot robot;
-  RobotConfig config;
-  Model model;
-  run::McapSession mapping;
-};
+run::McapSession recorded_mapping(const RecordedSession& session, std::shared_ptr<const Scene> scene = nullptr) {
+  return run::mcap_session(run::session_robot(session.lcm_log, "CSP_STATE", {}), std::move(scene));
+}
 
 std::vector<nlohmann::json> messages_on(const std::string& path, const std::string& topic) {
   const mcap::File file = mcap::read_file(path);
@@ -347,9 +336,8 @@ TEST(McapExport, GivesBackTheCsvJointLogBitForBit) {
   ExtensionColumn column{"x_marker", {}};
   for (std::size_t row = 0; row < log.size(); ++row) column.values.push_back(1.0 / 3.0 + 1e-17 * static_cast<double>(row));
   log.extensions.push_back(column);
-  const Export exported(session);
   const std::string path = (test::temp_dir() / "roundtrip.mcap").string();
-  const run::McapExportReport report = run::write_session_mcap(path, log, exported.mapping);
+  const run::McapExportReport report = run::write_session_mcap(path, log, recorded_mapping(session));
   EXPECT_EQ(report.rows, log.size());
 
   const JointLog back = run::read_joint_log(path, "CSP_STATE");   // told from a CSV by its magic
@@ -371,13 +359,8 @@ TEST(McapExport, GivesBackTheCsvJointLogBitForBit) {
 }
 
 // /tf composed from link0 to the EE, message by message, is the O_T_EE the emulator published.
-TEST(McapExport, TransformsComposeToTheLoggedEndEffectorPose) {
-  const RecordedSession session;
-  const JointLog log = read_joint_log_csv(session.csv_log);
+void expect_transforms_compose_to_the_logged_pose(const std::string& path, const JointLog& log) {
   ASSERT_FALSE(log.O_T_EE.empty());
-  const Export exported(session);
-  const std::string path = (test::temp_dir() / "tf.mcap").string();
-  run::write_session_mcap(path, log, exported.mapping);
   const std::vector<nlohmann::json> tf = messages_on(path, "/tf");
   ASSERT_EQ(tf.size(), log.size());
   for (std::size_t row = 0; row < log.size(); ++row) {
@@ -399,6 +382,23 @@ TEST(McapExport, TransformsComposeToTheLoggedEndEffectorPose) {
   }
 }
 
+TEST(McapExport, TransformsComposeToTheLoggedEndEffectorPose) {
+  const RecordedSession session;
+  const JointLog log = read_joint_log_csv(session.csv_log);
+  const std::string path = (test::temp_dir() / "tf.mcap").string();
+  run::write_session_mcap(path, log, recorded_mapping(session));
+  expect_transforms_compose_to_the_logged_pose(path, log);
+}
+
+// A scene that mounts a tool (the ultrasound probe): the EE frame is the tool's TCP, as the emulator's.
+TEST(McapExport, TheEndEffectorOfASceneToolIsItsTcp) {
+  const RecordedSession session(kUltrasoundScenario);
+  const JointLog log = read_joint_log_csv(session.csv_log);
+  const std::string path = (test::temp_dir() / "tool.mcap").string();
+  run::write_session_mcap(path, log, recorded_mapping(session, session.scenario.emulator.scene));
+  expect_transforms_compose_to_the_logged_pose(path, log);
+}
+
 TEST(McapExport, ErrorsAndModeChangesAreLogMessages) {
   const RecordedSession session;
   JointLog log = read_joint_log_csv(session.csv_log);
@@ -407,9 +407,8 @@ TEST(McapExport, ErrorsAndModeChangesAreLogMessages) {
     log.current_errors[row] = "[joint_position_limits_violation|cartesian_reflex]";
     log.robot_mode[row] = "Reflex";
   }
-  const Export exported(session);
   const std::string path = (test::temp_dir() / "errors.mcap").string();
-  run::write_session_mcap(path, log, exported.mapping);
+  run::write_session_mcap(path, log, recorded_mapping(session));
   std::vector<std::pair<int, std::string>> logged;
   for (const nlohmann::json& message : messages_on(path, "/errors")) logged.emplace_back(message["level"], message["message"]);
   // What the row's mode was before the reflex, and after.
@@ -427,10 +426,10 @@ TEST(McapExport, ErrorsAndModeChangesAreLogMessages) {
 TEST(McapExport, WritesTheSceneOnceWithEveryObstacle) {
   const RecordedSession session;
   const JointLog log = read_joint_log_csv(session.csv_log);
-  const Scene scene = load_scene(kScene);
-  const Export exported(session, &scene);
+  const auto scene_file = std::make_shared<const Scene>(load_scene(kScene));
+  const Scene& scene = *scene_file;
   const std::string path = (test::temp_dir() / "scene.mcap").string();
-  const run::McapExportReport report = run::write_session_mcap(path, log, exported.mapping);
+  const run::McapExportReport report = run::write_session_mcap(path, log, recorded_mapping(session, scene_file));
   EXPECT_EQ(report.obstacles, scene.obstacles.size());
   const std::vector<nlohmann::json> updates = messages_on(path, "/scene");
   ASSERT_EQ(updates.size(), 1u);

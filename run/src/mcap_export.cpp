@@ -1,10 +1,13 @@
 #include "csp/run/mcap_export.hpp"
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/io/mcap.hpp"
+#include "csp/io/robot_config.hpp"
 
 namespace csp::run {
 namespace {
@@ -230,7 +233,30 @@ std::string log_json(uint64_t ns, int level, const std::string& message) {
       .dump();
 }
 
+std::string text_of(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 }  // namespace
+
+McapSession mcap_session(const SessionRobot& robot, std::shared_ptr<const Scene> scene) {
+  const RobotConfig config = load_robot_config(robot.robot_file);
+  ModelOptions options;
+  options.end_effector = robot.end_effector;
+  ModelParameters parameters = model_parameters(config, options);
+  if (scene && robot.recorded && robot.recorded->scene_tool) parameters = with_tool(parameters, scene->tool);
+  McapSession session{Model(parameters), config.name, std::move(scene), robot.record};
+  if (!robot.recorded) {   // a CSV joint log: the robot used, as a scenario record names it
+    session.record.path = "(none: a joint log exported with this robot)";
+    session.record.text = "end_effector: " + robot.end_effector + "\n";
+    session.record.robot_path = robot.robot_file;
+    session.record.robot_text = text_of(robot.robot_file);
+  }
+  return session;
+}
 
 McapExportReport write_session_mcap(const std::string& path, const JointLog& log, const McapSession& session) {
   check_joint_log(log);
@@ -250,12 +276,12 @@ McapExportReport write_session_mcap(const std::string& path, const JointLog& log
   McapExportReport report;
   const std::string& robot = session.robot_name;
   if (session.scene) {
-    const uint16_t scene = writer.add_channel(writer.add_schema("foxglove.SceneUpdate", encoding, scene_update_schema()),
+    const uint16_t scene_channel = writer.add_channel(writer.add_schema("foxglove.SceneUpdate", encoding, scene_update_schema()),
                                               kSceneTopic, "json");
     const uint64_t ns = log_time(log, 0);
     Json entities = Json::array();
     for (const Obstacle& obstacle : session.scene->obstacles) entities.push_back(obstacle_entity(obstacle, robot + "_link0", ns));
-    writer.write_message(scene, ns, Json{{"deletions", Json::array()}, {"entities", entities}}.dump());
+    writer.write_message(scene_channel, ns, Json{{"deletions", Json::array()}, {"entities", entities}}.dump());
     report.obstacles = session.scene->obstacles.size();
   }
 
@@ -266,7 +292,7 @@ McapExportReport write_session_mcap(const std::string& path, const JointLog& log
   for (std::size_t row = 0; row < log.size(); ++row) {
     const uint64_t ns = log_time(log, row);
     writer.write_message(joint_states, ns, joint_state_json(log, row, ns, names));
-    writer.write_message(tf, ns, transforms_json(*session.model, data, robot, log.q[row], ns, with_end_effector));
+    writer.write_message(tf, ns, transforms_json(session.model, data, robot, log.q[row], ns, with_end_effector));
     // A reflex or an error shows as it begins and ends: the columns' changes, not every row.
     if (!log.current_errors.empty() && log.current_errors[row] != (row == 0 ? "[]" : log.current_errors[row - 1])) {
       const bool errors_now = log.current_errors[row] != "[]";

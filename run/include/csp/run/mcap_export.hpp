@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -22,6 +23,7 @@
 #include "csp/dynamics/model.hpp"
 #include "csp/io/joint_log.hpp"
 #include "csp/io/scene.hpp"
+#include "csp/run/session_log.hpp"
 
 namespace csp::run {
 
@@ -33,13 +35,18 @@ inline constexpr const char* kSessionMetadata = "csp.session";
 
 // What the export needs of the session besides its rows.
 struct McapSession {
-  const Model* model = nullptr;   // the robot's model: /tf's forward kinematics (its end effector's F_T_EE)
-  std::string robot_name;         // the robot file's `name` (panda, fr3): the frames' prefix, as franka_description
-  const Scene* scene = nullptr;   // null: no /scene
+  Model model;                          // the robot's model: /tf's forward kinematics (its end effector's F_T_EE)
+  std::string robot_name;               // the robot file's `name` (panda, fr3): the frames' prefix, as franka_description
+  std::shared_ptr<const Scene> scene;   // null: no /scene
   // The scenario record written as "csp.session" (a scenario_t's fields: path, text, robot_path,
-  // robot_text); for a CSV joint log a record naming the given robot file and end effector.
+  // robot_text); for a log without one a record naming the robot file and end effector used.
   scenario_t record;
 };
+
+// The session of a log, with the robot session_robot found for it and a scene (may be null). The
+// tool of the recorded scenario's scene, when it mounts one, is the robot's end effector (the
+// emulator's O_T_EE is its TCP). Throws ConfigError for a robot file that cannot be used.
+McapSession mcap_session(const SessionRobot& robot, std::shared_ptr<const Scene> scene);
 
 struct McapExportReport {
   uint64_t rows = 0;
