@@ -1,8 +1,6 @@
 #include "csp/run/mcap_export.hpp"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "csp/dynamics/algorithms.hpp"
@@ -233,13 +231,6 @@ std::string log_json(uint64_t ns, int level, const std::string& message) {
       .dump();
 }
 
-std::string text_of(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 }  // namespace
 
 McapSession mcap_session(const SessionRobot& robot, std::shared_ptr<const Scene> scene) {
@@ -248,14 +239,7 @@ McapSession mcap_session(const SessionRobot& robot, std::shared_ptr<const Scene>
   options.end_effector = robot.end_effector;
   ModelParameters parameters = model_parameters(config, options);
   if (scene && robot.recorded && robot.recorded->scene_tool) parameters = with_tool(parameters, scene->tool);
-  McapSession session{Model(parameters), config.name, std::move(scene), robot.record};
-  if (!robot.recorded) {   // a CSV joint log: the robot used, as a scenario record names it
-    session.record.path = "(none: a joint log exported with this robot)";
-    session.record.text = "end_effector: " + robot.end_effector + "\n";
-    session.record.robot_path = robot.robot_file;
-    session.record.robot_text = text_of(robot.robot_file);
-  }
-  return session;
+  return McapSession{Model(parameters), config.name, std::move(scene), robot.record};
 }
 
 McapExportReport write_session_mcap(const std::string& path, const JointLog& log, const McapSession& session) {

@@ -34,7 +34,13 @@ SessionRobot session_robot(const std::string& log_path, const std::string& state
     records = bridge::outline(log_path).scenario_records;
     std::erase_if(records, [&](const scenario_t& r) { return bridge::Channels(r.channel_prefix).state != state_channel; });
   }
-  if (records.empty()) return robot;
+  if (records.empty()) {
+    robot.record.path = "(none: the robot given for the log)";
+    robot.record.text = "end_effector: " + given.end_effector + "\n";
+    robot.record.robot_path = given.robot_file;
+    robot.record.robot_text = text_or_empty(given.robot_file);
+    return robot;
+  }
   const auto record = records.begin();
 
   robot.recorded = std::make_unique<bridge::RecordedRobot>(*record);

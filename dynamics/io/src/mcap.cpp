@@ -36,15 +36,19 @@ void append_record(std::string& out, Opcode opcode, std::string_view content) {
   out.append(content);
 }
 
+std::string record_bytes(Opcode opcode, std::string_view content) {
+  std::string record;
+  append_record(record, opcode, content);
+  return record;
+}
+
 std::string schema_record(const Schema& schema) {
   std::string content;
   append(content, schema.id);
   append_string(content, schema.name);
   append_string(content, schema.encoding);
   append_string(content, schema.data);
-  std::string record;
-  append_record(record, Opcode::kSchema, content);
-  return record;
+  return record_bytes(Opcode::kSchema, content);
 }
 
 std::string channel_record(const Channel& channel) {
@@ -54,9 +58,7 @@ std::string channel_record(const Channel& channel) {
   append_string(content, channel.topic);
   append_string(content, channel.message_encoding);
   append_key_values(content, channel.metadata);
-  std::string record;
-  append_record(record, Opcode::kChannel, content);
-  return record;
+  return record_bytes(Opcode::kChannel, content);
 }
 
 void append_id_counts(std::string& out, const std::map<uint16_t, uint64_t>& map) {
@@ -89,9 +91,7 @@ Writer::Writer(const std::string& path, const std::string& profile, const std::s
   std::string header;
   append_string(header, profile);
   append_string(header, library);
-  std::string record;
-  append_record(record, Opcode::kHeader, header);
-  write_data(record);
+  write_data(record_bytes(Opcode::kHeader, header));
 }
 
 Writer::~Writer() {
@@ -157,8 +157,7 @@ void Writer::write_chunk() {
   append_string(content, "");                               // compression: none
   append(content, static_cast<uint64_t>(chunk_.size()));   // records, uint64 length-prefixed
   content.append(chunk_);
-  std::string record;
-  append_record(record, Opcode::kChunk, content);
+  const std::string record = record_bytes(Opcode::kChunk, content);
   ChunkIndex index{chunk_start_, chunk_end_, offset_, record.size(), 0, chunk_.size(), {}};
   write_data(record);
   const uint64_t indexes_start = offset_;
@@ -170,10 +169,8 @@ void Writer::write_chunk() {
       append(index_content, log_time);
       append(index_content, chunk_offset);
     }
-    std::string index_record;
-    append_record(index_record, Opcode::kMessageIndex, index_content);
     index.message_index_offsets[channel_id] = offset_;
-    write_data(index_record);
+    write_data(record_bytes(Opcode::kMessageIndex, index_content));
   }
   index.message_index_length = offset_ - indexes_start;
   chunks_.push_back(std::move(index));
@@ -186,8 +183,7 @@ void Writer::write_metadata(const Metadata& metadata) {
   std::string content;
   append_string(content, metadata.name);
   append_key_values(content, metadata.entries);
-  std::string record;
-  append_record(record, Opcode::kMetadata, content);
+  const std::string record = record_bytes(Opcode::kMetadata, content);
   metadata_.push_back({offset_, record.size(), metadata.name});
   write_data(record);
 }
@@ -221,9 +217,7 @@ std::string Writer::summary_section(uint64_t summary_start, std::string& offsets
   append(statistics, start_time_);
   append(statistics, end_time_);
   append_id_counts(statistics, message_counts_);
-  records.clear();
-  append_record(records, Opcode::kStatistics, statistics);
-  group(Opcode::kStatistics, records);
+  group(Opcode::kStatistics, record_bytes(Opcode::kStatistics, statistics));
 
   records.clear();
   for (const ChunkIndex& chunk : chunks_) {
@@ -259,9 +253,7 @@ void Writer::close() {
   write_chunk();
   std::string data_end_content;
   append(data_end_content, data_crc_);
-  std::string data_end;
-  append_record(data_end, Opcode::kDataEnd, data_end_content);
-  write_data(data_end);
+  write_data(record_bytes(Opcode::kDataEnd, data_end_content));
 
   const uint64_t summary_start = offset_;
   std::string offsets;

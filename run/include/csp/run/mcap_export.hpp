@@ -39,7 +39,7 @@ struct McapSession {
   std::string robot_name;               // the robot file's `name` (panda, fr3): the frames' prefix, as franka_description
   std::shared_ptr<const Scene> scene;   // null: no /scene
   // The scenario record written as "csp.session" (a scenario_t's fields: path, text, robot_path,
-  // robot_text); for a log without one a record naming the robot file and end effector used.
+  // robot_text): SessionRobot::record.
   scenario_t record;
 };
 

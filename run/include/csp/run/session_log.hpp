@@ -31,7 +31,9 @@ struct SessionRobot {
 
   std::unique_ptr<bridge::RecordedRobot> recorded;   // the log's record of the robot; null without one
   std::string recorded_scenario;                     // the recorded scenario's path
-  scenario_t record;                                 // the record itself (with `recorded`)
+  // The robot used as a scenario record names it: the log's record, else (no record) the given robot
+  // file (its path and text) and `end_effector:` as the scenario text (what an MCAP export stores).
+  scenario_t record;
   // With a record: one line naming what is used ("the robot's recorded scenario S: its robot file R,
   // its end effector hand"), and notes: where the given robot differs from the recording, what of the
   // recording is not taken (a scene's tool).
