@@ -62,7 +62,7 @@ Command add_log_command(CLI::App& app) {
   cmd->require_subcommand(1);
   CLI::App* to_csv = cmd->add_subcommand(
       "export", "Write the robot states of an LCM log as CSV, or a session log (LCM or CSV) as MCAP for Foxglove and Rerun (docs/mcap.md)");
-  to_csv->add_option("log", args->input, "LCM log file (csv); LCM log or CSV joint log (mcap)")->required();
+  to_csv->add_option("log", args->input, "LCM log file (csv); LCM log, CSV joint log or MCAP file (mcap)")->required();
   to_csv->add_option("--format", args->format, "csv: the joint log; mcap: /joint_states, /tf, /scene, /errors as JSON")
       ->check(CLI::IsMember({"csv", "mcap"}))
       ->capture_default_str();

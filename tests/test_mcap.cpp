@@ -4,6 +4,7 @@
 // tests/mcap/read_with_mcap_core.mjs reads the same files with the reference reader (CTest).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -472,6 +473,35 @@ TEST(McapExport, RefusesAJointStateWithoutItsColumns) {
     FAIL() << "read";
   } catch (const JointLogError& e) {
     EXPECT_EQ(std::string(e.what()), path + ": /joint_states message 1 (log_time 0 ns): no `effort`");
+  }
+}
+
+// `csp log export --format mcap`: bad input is one line naming it, exit 2; the MCAP file it writes
+// is read back by the same command (an MCAP file is a session log too).
+TEST(McapExport, TheCommandRefusesBadInputInOneLine) {
+  const RecordedSession session;
+  const std::string mcap_file = (test::temp_dir() / "command.mcap").string();
+  const test::ProgramRun exported = test::run_program(CSP_EXECUTABLE, {"log", "export", session.lcm_log, "--format", "mcap", "--out", mcap_file});
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  EXPECT_NE(exported.out.find("rows to " + mcap_file), std::string::npos) << exported.out;
+  const std::string again = (test::temp_dir() / "again.mcap").string();
+  EXPECT_EQ(test::run_program(CSP_EXECUTABLE, {"log", "export", mcap_file, "--format", "mcap", "--out", again}).exit_code, 0);
+  EXPECT_TRUE(same_bits(run::read_joint_log(again, "CSP_STATE").q, read_joint_log_csv(session.csv_log).q));
+
+  const std::string cut = test::write_temp("cut.mcap", file_text(mcap_file).substr(0, 5000));
+  const std::string out = (test::temp_dir() / "out.mcap").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"log", "export", cut, "--format", "mcap", "--out", out}, cut + ": byte "},
+      {{"log", "export", session.csv_log, "--format", "mcap", "--robot", "missing.yaml", "--out", out}, "missing.yaml"},
+      {{"log", "export", session.csv_log, "--format", "mcap", "--scene", "missing.yaml", "--out", out}, "missing.yaml"},
+      {{"log", "export", session.lcm_log, "--scene", kScene, "--out", out}, "only with --format mcap"},
+      {{"log", "export", session.lcm_log, "--format", "json", "--out", out}, "--format"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const test::ProgramRun run = test::run_program(CSP_EXECUTABLE, args);
+    EXPECT_EQ(run.exit_code, 2) << args[2] << ": " << run.err;
+    EXPECT_NE(run.err.find(expected), std::string::npos) << run.err;
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
   }
 }
 
