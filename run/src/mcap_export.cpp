@@ -260,8 +260,8 @@ McapExportReport write_session_mcap(const std::string& path, const JointLog& log
   McapExportReport report;
   const std::string& robot = session.robot_name;
   if (session.scene) {
-    const uint16_t scene_channel = writer.add_channel(writer.add_schema("foxglove.SceneUpdate", encoding, scene_update_schema()),
-                                              kSceneTopic, "json");
+    const uint16_t scene_channel = writer.add_channel(
+        writer.add_schema("foxglove.SceneUpdate", encoding, scene_update_schema()), kSceneTopic, "json");
     const uint64_t ns = log_time(log, 0);
     Json entities = Json::array();
     for (const Obstacle& obstacle : session.scene->obstacles) entities.push_back(obstacle_entity(obstacle, robot + "_link0", ns));

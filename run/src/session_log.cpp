@@ -1,6 +1,5 @@
 #include "csp/run/session_log.hpp"
 
-#include <algorithm>
 #include <fstream>
 #include <sstream>
 
