@@ -28,7 +28,7 @@ struct LogArguments {
 // for /tf, and the scene given or its recorded scenario's for /scene.
 int export_mcap(const LogArguments& args) {
   const run::SessionRobot robot =
-      run::session_robot(args.input, args.channel, {args.robot, args.end_effector, args.robot_given, args.ee_given});
+      run::session_robot(args.input, args.channel, {args.robot, args.end_effector, args.robot_given, args.ee_given, true});
   if (!robot.used.empty()) std::cerr << "csp log export: " << args.input << ": " << robot.used << "\n";
   for (const std::string& note : robot.notes) std::cerr << "csp log export: " << args.input << ": " << note << "\n";
   const JointLog log = run::read_joint_log(args.input, args.channel);
@@ -41,7 +41,7 @@ int export_mcap(const LogArguments& args) {
     try {
       scene = rt::load_scenario(robot.recorded_scenario).emulator.scene;
     } catch (const std::exception& e) {
-      std::cerr << "csp log export: " << args.input << ": no /scene: the recorded scenario cannot be loaded (give --scene): "
+      std::cerr << "csp log export: " << args.input << ": no /scene (nor its tool): the recorded scenario cannot be loaded (give --scene): "
                 << e.what() << "\n";
     }
   }

@@ -55,7 +55,9 @@ SessionRobot session_robot(const std::string& log_path, const std::string& state
   if (!given.end_effector_given) robot.end_effector = recorded.end_effector;
   else if (given.end_effector != recorded.end_effector)
     robot.notes.push_back("--ee " + given.end_effector + " differs from the end effector it recorded (" + recorded.end_effector + ")");
-  if (recorded.scene_tool) robot.notes.push_back("its scenario's scene mounts a tool, which is not taken (give it as --load-*)");
+  if (recorded.scene_tool)
+    robot.notes.push_back(given.takes_scene_tool ? "its scenario's scene mounts a tool: its TCP is the end effector"
+                                                 : "its scenario's scene mounts a tool, which is not taken (give it as --load-*)");
   robot.used = "the robot's recorded scenario " + record->path + ": " +
                (given.robot_file_given ? "--robot " + given.robot_file : "its robot file " + recorded.recorded_path) +
                (given.end_effector_given ? ", --ee " : ", its end effector ") + robot.end_effector;

@@ -20,6 +20,9 @@ struct GivenRobot {
   std::string end_effector;
   bool robot_file_given = false;
   bool end_effector_given = false;
+  // The reader mounts a recorded scene's tool itself (mcap_session: its TCP is the end effector of
+  // /tf); csp gap does not (a note says so).
+  bool takes_scene_tool = false;
 };
 
 // What to build the model of a log's robot from. Without a scenario record for the log's state
