@@ -1,12 +1,16 @@
-// csp log export / import: LCM logs <-> CSV joint logs (docs/joint-log.md).
+// csp log export / import: LCM logs <-> CSV joint logs (docs/joint-log.md); a session log as MCAP
+// for Foxglove and Rerun (docs/mcap.md).
 #include <cstdio>
 #include <filesystem>
+#include <iostream>
 #include <memory>
 
 #include "cli_options.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 #include "csp/bridge/csv_convert.hpp"
+#include "csp/run/mcap_export.hpp"
+#include "csp/run/session_log.hpp"
 
 namespace csp::cli {
 namespace {
@@ -14,8 +18,41 @@ namespace {
 struct LogArguments {
   std::string input, out;
   std::string channel = "CSP_STATE";
+  std::string format = "csv";
+  std::string robot = ModelArguments{}.robot, end_effector = "none", scene;
+  bool robot_given = false, ee_given = false;
   bool progress = false;
 };
+
+// `csp log export --format mcap`: the session's rows with the robot it recorded (or the one given)
+// for /tf, and the scene given or its recorded scenario's for /scene.
+int export_mcap(const LogArguments& args) {
+  const run::SessionRobot robot =
+      run::session_robot(args.input, args.channel, {args.robot, args.end_effector, args.robot_given, args.ee_given, true});
+  if (!robot.used.empty()) std::cerr << "csp log export: " << args.input << ": " << robot.used << "\n";
+  for (const std::string& note : robot.notes) std::cerr << "csp log export: " << args.input << ": " << note << "\n";
+  const JointLog log = run::read_joint_log(args.input, args.channel);
+  // The scene: the one given, else the recorded scenario's where its file is still there (a scenario
+  // record holds the scenario's text, not its scene's). A recorded scene's tool is the robot's end effector.
+  std::shared_ptr<const Scene> scene;
+  if (!args.scene.empty()) {
+    scene = std::make_shared<Scene>(load_scene(args.scene));
+  } else if (robot.recorded && robot.record.text.find("scene:") != std::string::npos) {
+    try {
+      scene = rt::load_scenario(robot.recorded_scenario).emulator.scene;
+    } catch (const std::exception& e) {
+      std::cerr << "csp log export: " << args.input << ": no /scene (nor its tool): the recorded scenario cannot be loaded (give --scene): "
+                << e.what() << "\n";
+    }
+  }
+  const run::McapSession session = run::mcap_session(robot, scene);
+  const run::McapExportReport r = run::write_session_mcap(args.out, log, session);
+  std::printf("csp log export: %llu rows to %s (/joint_states, /tf%s, /errors: %llu messages)\n",
+              static_cast<unsigned long long>(r.rows), args.out.c_str(),
+              scene ? (", /scene: " + std::to_string(r.obstacles) + " obstacles").c_str() : "",
+              static_cast<unsigned long long>(r.error_messages));
+  return 0;
+}
 
 }  // namespace
 
@@ -23,8 +60,15 @@ Command add_log_command(CLI::App& app) {
   auto args = std::make_shared<LogArguments>();
   CLI::App* cmd = app.add_subcommand("log", "Convert LCM logs to and from CSV joint logs (docs/joint-log.md)");
   cmd->require_subcommand(1);
-  CLI::App* to_csv = cmd->add_subcommand("export", "Write the robot states of an LCM log as CSV");
-  to_csv->add_option("log", args->input, "LCM log file")->required();
+  CLI::App* to_csv = cmd->add_subcommand(
+      "export", "Write the robot states of an LCM log as CSV, or a session log (LCM or CSV) as MCAP for Foxglove and Rerun (docs/mcap.md)");
+  to_csv->add_option("log", args->input, "LCM log file (csv); LCM log, CSV joint log or MCAP file (mcap)")->required();
+  to_csv->add_option("--format", args->format, "csv: the joint log; mcap: /joint_states, /tf, /scene, /errors as JSON")
+      ->check(CLI::IsMember({"csv", "mcap"}))
+      ->capture_default_str();
+  to_csv->add_option("--robot", args->robot, "mcap: robot file for /tf (default: the one the log recorded, else panda)");
+  to_csv->add_option("--ee", args->end_effector, "mcap: end effector of the robot file (default: the recorded one, else none)");
+  to_csv->add_option("--scene", args->scene, "mcap: scene file for /scene (default: the recorded scenario's scene, if any)");
   CLI::App* from_csv = cmd->add_subcommand("import", "Turn a CSV joint log (t, q, dq, tau_J and any optional groups) into an LCM log");
   from_csv->add_option("csv", args->input, "CSV file")->required();
   for (CLI::App* sub : {to_csv, from_csv}) {
@@ -34,7 +78,12 @@ Command add_log_command(CLI::App& app) {
   }
   return [args, to_csv] {
     // Opening the output truncates it: writing over the input would destroy what is being read.
-    Outputs().file("--out", args->out).input(to_csv->parsed() ? "the LCM log" : "the CSV file", args->input).check();
+    Outputs().file("--out", args->out).input(to_csv->parsed() ? "the log" : "the CSV file", args->input).check();
+    args->robot_given = to_csv->count("--robot") > 0;
+    args->ee_given = to_csv->count("--ee") > 0;
+    if (args->format != "mcap" && (args->robot_given || args->ee_given || !args->scene.empty()))
+      throw UsageError("--robot, --ee and --scene: only with --format mcap");
+    if (to_csv->parsed() && args->format == "mcap") return export_mcap(*args);
     if (to_csv->parsed()) {
       ProgressMeter progress("csp log export", args->progress);
       const bridge::ExportReport r = bridge::export_csv(args->input, args->out, args->channel, progress.callback());
