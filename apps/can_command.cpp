@@ -7,6 +7,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "view_option.hpp"
 #include "csp/can/export.hpp"
 #include "csp/io/svg_plot.hpp"
 #include "csp/run/can_source.hpp"
@@ -27,6 +28,7 @@ struct CanArguments {
   double bitrate = 1e6;
   int split = 1;
   std::string log, csv;
+  ViewOption view;   // serve
 };
 
 int write_text(const std::string& text, const std::string& path) {
@@ -71,9 +73,11 @@ int run_serve(const CanArguments& args) {
   std::fflush(stdout);
   run::Run run(scenario);
   const std::unique_ptr<run::CsvLogObserver> csv = run::observe_csv_log(run, args.csv);
+  const std::unique_ptr<LiveViewSession> live_view = start_live_view(args.view, run, "csp can serve " + scenario.name);
   run::CanBusSource bus(options);
   // Ctrl-C / SIGTERM end the run cleanly: the logs keep every cycle run.
   const run::RunResult result = run.run(bus, &stop_on_signals());
+  if (live_view) live_view->end(run, result);
   const std::string log_failure = flush_logs(result.observer_failure, csv.get());   // (the LCM log: the CAN source)
 
   const can::CanServeReport& r = bus.report();
@@ -133,6 +137,7 @@ Command add_can_command(CLI::App& app) {
       ->capture_default_str();
   serve->add_option("--log", args->log, "Record the session as an LCM log (csp replay re-simulates it)");
   serve->add_option("--csv", args->csv, "Write the per-cycle CSV log of the robot (docs/joint-log.md; csp gap reads it)");
+  args->view.add_to(*serve);
   serve->add_option("--duration", args->scenario.duration, "Robot time to serve [s] (default: the scenario's)");
   CLI::App* eds = cmd->add_subcommand("eds", "Print the EDS (CiA 306) of a joint drive");
   eds->add_option("--node", args->node, "Node id 1..7 = joint 1..7 (the default assignment)")

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "view_option.hpp"
 #include "csp/fci/model_library.hpp"
 #include "csp/io/robot_config.hpp"
 #include "csp/run/fci_source.hpp"
@@ -20,6 +21,7 @@ struct FciArguments {
   std::string address = "127.0.0.1";
   double lockstep_timeout = 1.0;
   std::string csv;
+  ViewOption view;
 };
 
 // The protocol a robot speaks: an FR3 libfranka 0.13 (version 7), a Panda libfranka 0.9
@@ -40,6 +42,7 @@ int run_fci(const FciArguments& args) {
     throw UsageError("--lockstep-timeout: expected a positive number of seconds, at most 3600");
   run::Run run(scenario);
   const std::unique_ptr<run::CsvLogObserver> csv = run::observe_csv_log(run, args.csv);
+  const std::unique_ptr<LiveViewSession> live_view = start_live_view(args.view, run, "csp fci " + scenario.name);
 
   fci::FciServeOptions options;
   options.address = args.address;
@@ -63,6 +66,7 @@ int run_fci(const FciArguments& args) {
   run::FciSource network(options);
   // Ctrl-C / SIGTERM end the run cleanly: the logs keep every cycle run.
   const run::RunResult result = run.run(network, &stop_on_signals());
+  if (live_view) live_view->end(run, result);
   const std::string log_failure = flush_logs(result.observer_failure, csv.get());
 
   const fci::FciServeReport& r = network.report();
@@ -105,6 +109,7 @@ Command add_fci_command(CLI::App& app) {
   cmd->add_option("--lockstep-timeout", args->lockstep_timeout, "Lockstep: how long a motion's cycle waits for its command [s]")
       ->capture_default_str();
   cmd->add_option("--csv", args->csv, "Write the per-cycle CSV log of the robot (docs/joint-log.md; csp gap reads it)");
+  args->view.add_to(*cmd);
   return [args] { return run_fci(*args); };
 }
 

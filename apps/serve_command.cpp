@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "view_option.hpp"
 #include "csp/bridge/lcm_url.hpp"
 #include "csp/run/observers.hpp"
 #include "csp/run/sources.hpp"
@@ -23,6 +24,7 @@ struct ServeArguments {
   std::string log, csv;
   double lockstep_timeout = 1.0;
   bool wait = false;
+  ViewOption view;
 };
 
 int run_serve(const ServeArguments& args) {
@@ -46,6 +48,7 @@ int run_serve(const ServeArguments& args) {
   options.wait_for_controller = args.wait;
   run::Run run(scenario);
   const std::unique_ptr<run::CsvLogObserver> csv = run::observe_csv_log(run, args.csv);
+  const std::unique_ptr<LiveViewSession> live_view = start_live_view(args.view, run, "csp serve " + scenario.name);
   run::LcmBusSource bus(options);
 
   std::printf("csp serve: %s (%s), %s clock, %.3f s on %s, channels %sCSP_*\n", scenario.name.c_str(), scenario.path.c_str(),
@@ -54,6 +57,7 @@ int run_serve(const ServeArguments& args) {
   std::fflush(stdout);
   // Ctrl-C / SIGTERM end the run cleanly: the logs keep every cycle run.
   const run::RunResult result = run.run(bus, &stop_on_signals());
+  if (live_view) live_view->end(run, result);
   const std::string log_failure = flush_logs(result.observer_failure, csv.get());   // (the LCM log: bridge::serve)
 
   const bridge::ServeReport& r = bus.report();
@@ -91,6 +95,7 @@ Command add_serve_command(CLI::App& app) {
   cmd->add_option("--lockstep-timeout", args->lockstep_timeout, "Lockstep: how long a cycle waits for its command [s]")
       ->capture_default_str();
   cmd->add_flag("--wait", args->wait, "Lockstep: hold the first cycle until a controller starts a session");
+  args->view.add_to(*cmd);
   return [args] { return run_serve(*args); };
 }
 

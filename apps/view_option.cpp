@@ -41,6 +41,11 @@ void LiveViewSession::finish(const run::Run& run, const std::string& how, const 
   live_->finish(run.emulator().state(), how);
 }
 
+void LiveViewSession::end(const run::Run& run, const run::RunResult& result) {
+  const rt::RobotState& state = run.emulator().state();
+  live_->finish(state, (result.stopped ? "stopped at t = " : "ended at t = ") + std::to_string(state.time.toSec()) + " s");
+}
+
 void LiveViewSession::serve_until_signal() const {
   std::printf("  view: %s stays served until Ctrl-C\n", server_->url().c_str());
   std::fflush(stdout);

@@ -26,6 +26,9 @@ class LiveViewSession {
   // Serves the page for `run`'s robot and scene and prints its address; the observer is added to
   // `run`. Throws std::runtime_error when the port cannot be served.
   LiveViewSession(const ViewOption& option, run::Run& run, const std::string& title);
+  // A bus's run is over (csp serve, can serve, fci): the pages are told how, at which time. The
+  // process ends next: the page keeps what it was sent.
+  void end(const run::Run& run, const run::RunResult& result);
   // Until a page is connected or `stop` is set (a signal): csp emulate starts its run for someone.
   void wait_for_page(const std::atomic<bool>& stop) const;
   // The run is over (`how`): the pages are told; with the run's CSV log (may be empty), the page

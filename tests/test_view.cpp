@@ -336,7 +336,8 @@ TEST(LiveView, APageSeesTheRunsStatesAsTheyHappenAndTheRunIsUnchanged) {
     const std::size_t row = static_cast<std::size_t>(std::lower_bound(states.t.begin(), states.t.end(), t) - states.t.begin());
     ASSERT_LT(row, states.size());
     ASSERT_EQ(states.t[row], t);
-    for (int j = 0; j < kNumJoints; ++j) EXPECT_EQ(frame["values"]["q" + std::to_string(j + 1)].get<double>(), states.q[row][j]);
+    const ColumnGroup& q = kJointLogSchema[1];
+    for (int j = 0; j < kNumJoints; ++j) EXPECT_EQ(frame["values"][column_name(q, j)].get<double>(), states.q[row][j]);
     const std::vector<Eigen::Matrix4d> expected = mdh_frames(states.q[row]);
     EXPECT_LT((matrix_of(frame["flange"]) - expected[7]).cwiseAbs().maxCoeff(), 2e-6);
   }
