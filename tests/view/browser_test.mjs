@@ -246,7 +246,29 @@ try {
   check(message.includes("connection to csp closed"), `a closed socket is said on the page ("${message}")`);
   await orphan.close();
 
-  // 4. A bad log: one line naming it, exit status 2, nothing served.
+  // 4. A reflex where it happens: fr3_float is pushed into cartesian_reflex (a scenario, run by csp view).
+  {
+    const reflex = await serve(["view", "fr3_float", "--port", "0"]);
+    const reflexPage = await openPage(reflex.url, "palette=flat&meshes=collision");
+    const events = await reflexPage.evaluate(() => window.cspView.events);
+    const first = events.find((e) => e.errors.length > 0);
+    check(first && first.errors[0].name === "cartesian_reflex", `the reflex is an event with its libfranka name (${JSON.stringify(first)})`);
+    const banner = await reflexPage.evaluate((t) => {
+      window.cspView.setTime(t);
+      const b = document.getElementById("banner");
+      return { hidden: b.hidden, text: b.textContent };
+    }, first.t);
+    check(!banner.hidden && banner.text.includes("cartesian_reflex") && banner.text.includes(first.t.toFixed(3)),
+          `the banner names the reflex and its time at that frame ("${banner.text}")`);
+    const listed = await reflexPage.evaluate(() => [...document.querySelectorAll("#events li")].map((li) => li.textContent));
+    check(listed.some((text) => text.includes("cartesian_reflex")), `the events list has it (${listed.join(" | ")})`);
+    await reflexPage.screenshot({ path: path.join(work, "reflex.png") });
+    await reflexPage.close();
+    reflex.child.kill("SIGINT");
+    await reflex.child.exited;
+  }
+
+  // 5. A bad log: one line naming it, exit status 2, nothing served.
   const bad = path.join(work, "bad.csv");
   fs.writeFileSync(bad, "t,q1\n0,abc\n");
   const refused = spawnSync(csp, ["view", bad, "--port", "0"], { encoding: "utf8" });

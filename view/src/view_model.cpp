@@ -131,7 +131,8 @@ json ViewModel::frame(const JointLog& log, std::size_t row) {
   forward_kinematics(model_, data_, log.q[row]);
   json links = json::array();
   for (const Transform& pose : data_.O_T_joint) links.push_back(pose_json(pose));
-  json frame = {{"t", t}, {"links", links}, {"flange", pose_json(data_.O_T_F)}, {"ee", pose_json(data_.O_T_EE)}};
+  json frame = {{"t", t}, {"q", vector_json(log.q[row])}, {"links", links}, {"flange", pose_json(data_.O_T_F)},
+                {"ee", pose_json(data_.O_T_EE)}};
   if (!log.q_d.empty()) {
     forward_kinematics(model_, data_, log.q_d[row]);
     frame["ee_d"] = vector_json(data_.O_T_EE.translation);

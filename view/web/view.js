@@ -219,6 +219,24 @@ const clearanceLine = new THREE.Line(new THREE.BufferGeometry().setFromPoints([n
 clearanceLine.visible = false;
 scene.add(clearanceLine);
 
+// Each joint's position between its limits (the robot file's), as a bar with a mark: the limits a
+// motion nears are seen before the reflex.
+const kNearLimit = 0.05;   // of the joint's range
+function showLimits(q) {
+  const limits = view.description.robot.limits;
+  const bars = $("hud-limits");
+  if (!bars.children.length) {
+    for (let j = 0; j < 7; ++j) bars.insertAdjacentHTML("beforeend", `<div class="joint">${j + 1}<div class="mark"></div></div>`);
+  }
+  q.forEach((value, j) => {
+    const share = (value - limits.q_min[j]) / (limits.q_max[j] - limits.q_min[j]);
+    const bar = bars.children[j];
+    bar.querySelector(".mark").style.bottom = `${Math.min(1, Math.max(0, share)) * 31}px`;
+    bar.classList.toggle("near", share < kNearLimit || share > 1 - kNearLimit);
+    bar.title = `joint ${j + 1}: ${value.toFixed(3)} rad in [${limits.q_min[j]}, ${limits.q_max[j]}]`;
+  });
+}
+
 // --- One frame on screen.
 function showFrame(f) {
   setPose(links[0], new THREE.Matrix4().toArray());
@@ -255,6 +273,7 @@ function showFrame(f) {
     banner.textContent = `${errors.map((e) => e.name + (e.joint >= 0 ? ` (joint ${e.joint + 1})` : "")).join(", ")} at t = ${f.t.toFixed(3)} s`;
   }
   $("hud-time").textContent = `t = ${f.t.toFixed(3)} s`;
+  showLimits(f.q);
   render();
 }
 

@@ -46,7 +46,7 @@ class ViewModel {
   // obstacles with their shapes and materials, the task's markers, the joint limits.
   nlohmann::json description() const;
 
-  // The frame of row `row` of `log`: time, each link's pose (link 1..7, flange, EE), the external
+  // The frame of row `row` of `log`: time, q, each link's pose (link 1..7, flange, EE), the external
   // wrench on the EE, the obstacles' displacement, the clearance, the robot's mode and errors.
   nlohmann::json frame(const JointLog& log, std::size_t row);
 
