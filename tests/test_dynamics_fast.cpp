@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "csp/dynamics/regressor.hpp"
 #include "support.hpp"
 
 namespace csp::test {
@@ -97,6 +98,50 @@ TEST(DynamicsFast, CoriolisMatrixMatchesTheSixBySixReference) {
       const Vector7 q = random.q(arm.model.parameters().joint_limits), dq = random.uniform(2.5);
       coriolis_matrix(arm.model, data, q, dq);
       ASSERT_TRUE(relatively_near(data.coriolis_matrix, reference_coriolis_matrix(arm.model, q, dq)));
+    }
+  }
+}
+
+// The regressor by its definition: column k is rnea of the model with standard parameter k increased by
+// one (the load lumped into link 7 first) minus rnea of the model.
+InertialRegressorRows reference_regressor(const Model& model, const Vector7& q, const Vector7& dq, const Vector7& ddq) {
+  Data data;
+  Vector7 tau0, tau;
+  rnea(model, data, q, dq, ddq, tau0);
+  InertialRegressorRows Y;
+  for (int k = 0; k < kInertialParameters; ++k) {
+    ModelParameters p = model.parameters();
+    p.end_effector = p.load = RigidBodyInertia{};
+    for (int i = 0; i < kNumJoints; ++i) {
+      LinkParameters value = link_parameters(model.body(i));
+      if (i == k / kLinkParameters) value[k % kLinkParameters] += 1.0;
+      p.links[i] = rigid_body(spatial_inertia(value));
+    }
+    rnea(Model(p), data, q, dq, ddq, tau);
+    Y.col(k) = tau - tau0;
+  }
+  return Y;
+}
+
+TEST(DynamicsFast, RegressorMatchesDifferencesOfRnea) {
+  for (const FastArm& arm : fast_arms()) {
+    SCOPED_TRACE(arm.name);
+    const InertialRegressor regressor(arm.model);
+    RandomStates random(3);
+    Data data;
+    for (int k = 0; k < fewer_when_sanitized(50, 5); ++k) {
+      const Vector7 q = random.q(arm.model.parameters().joint_limits), dq = random.uniform(2.5), ddq = random.uniform(10.0);
+      const InertialRegressorRows Y = regressor(data, q, dq, ddq);
+      // The differences of two RNEAs of ~100 N m lose ~1e-13 absolute: compare to that, relative to
+      // the largest torque, not to each column's own size.
+      Vector7 tau;
+      rnea(arm.model, data, q, dq, ddq, tau);
+      const InertialRegressorRows expected = reference_regressor(arm.model, q, dq, ddq);
+      ASSERT_LE((Y - expected).cwiseAbs().maxCoeff(), kRelative * tau.cwiseAbs().maxCoeff()) << Y - expected;
+      // The standard parameters reproduce the inverse dynamics.
+      Eigen::Matrix<double, kInertialParameters, 1> pi;
+      for (int i = 0; i < kNumJoints; ++i) pi.segment<kLinkParameters>(kLinkParameters * i) = link_parameters(arm.model.body(i));
+      ASSERT_TRUE(relatively_near(Vector7(Y * pi + arm.model.armature().cwiseProduct(ddq)), tau));
     }
   }
 }
