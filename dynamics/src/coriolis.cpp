@@ -50,7 +50,7 @@ struct CoriolisFactor {
 // C(m, k) = dS_k . (I^c_m S_m) + S_k . (B^c_m^T S_m) for k < m.
 // The armature is a constant diagonal inertia: it adds nothing to C.
 void coriolis_matrix(const Model& model, Data& data, const Vector7& q, const Vector7& dq) {
-  forward_kinematics(model, data, q);
+  detail::update_joint_frames(model, data, q);   // the flange, EE and K frames are not needed
   detail::update_base_inertias(model, data);
   detail::update_base_velocities(data, dq);
 
