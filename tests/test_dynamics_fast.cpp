@@ -1,7 +1,8 @@
-// The specialised algorithms (issue 29) against textbook references written out here in full 6x6
-// spatial algebra in base coordinates, as the library had them before: same quantity, other
-// arithmetic. Seeded random states, the Panda (gaz2019 with the Hand) and the FR3, with and without
-// armature. Tolerance 1e-12 relative to the largest entry of the reference: only rounding differs.
+// The specialised algorithms (issue 29) against their textbook forms, written out here as the
+// library had them before: the Coriolis matrix in full 6x6 spatial algebra in base coordinates, the
+// inertial regressor by its definition (differences of RNEA). Same quantity, other arithmetic.
+// Seeded random states, the Panda (gaz2019 with the Hand) and the FR3, with and without armature.
+// Tolerance 1e-12 relative to the largest entry of the reference: only rounding differs.
 #include <string>
 #include <vector>
 
