@@ -135,18 +135,26 @@ LinkRegressor link_regressor(const Vector3& w, const Vector3& dw, const Vector3&
 
 InertialRegressor::InertialRegressor(const Model& model) : model_(model) {}
 
-// Outward the link kinematics of rnea (detail::step_outward); then each link's 6x10 wrench
+// Outward the link kinematics as in rnea (Craig eqs. 6.45-6.47); then each link's 6x10 wrench
 // regressor is carried inward like a wrench (Craig eqs. 6.51-6.53), column by column, and the joint
 // torque rows are its moments' z components: Y(j, link i) = e_z . (^jX*_i A_i) for j <= i.
 InertialRegressorRows InertialRegressor::operator()(Data& data, const Vector7& q, const Vector7& dq,
                                                     const Vector7& ddq) const {
   detail::update_joint_angles(model_, data, q);
-  detail::LinkMotion motion;
-  motion.dv = -model_.gravity();
+  const Vector3 z = Vector3::UnitZ();
+  Vector3 w = Vector3::Zero(), dw = Vector3::Zero(), dv = -model_.gravity();
   InertialRegressorRows Y = InertialRegressorRows::Zero();
   for (int i = 0; i < kNumJoints; ++i) {
-    detail::step_outward(model_, data, i, dq[i], ddq[i], motion);
-    LinkRegressor A = link_regressor(motion.w, motion.dw, motion.dv);
+    const JointGeometry& joint = model_.joint(i);
+    const double c = data.cos_theta[i], s = data.sin_theta[i];
+    const Vector3& p = joint.origin;
+    const Vector3 dv_parent_at_origin = dw.cross(p) + w.cross(w.cross(p)) + dv;
+    const Vector3 w_parent = joint.rotate_back(c, s, w);
+    w = w_parent + dq[i] * z;
+    dw = joint.rotate_back(c, s, dw) + w_parent.cross(dq[i] * z) + ddq[i] * z;
+    dv = joint.rotate_back(c, s, dv_parent_at_origin);
+
+    LinkRegressor A = link_regressor(w, dw, dv);
     for (int j = i;; --j) {
       Y.block<1, kLinkParameters>(j, kLinkParameters * i) = A.row(5);
       if (j == 0) break;

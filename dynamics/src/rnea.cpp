@@ -28,16 +28,23 @@ void inward_pass(const Model& model, const Data& data, const LinkVectors& force,
 // inertia taken about the link origin so that the CoM terms fold into one spatial product.
 void newton_euler(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq,
                   const Vector3& gravity, const LinkWrenches& f_ext, Vector7& tau) {
+  const Vector3 z = Vector3::UnitZ();
   LinkVectors force, moment;
 
   detail::update_joint_angles(model, data, q);
 
   // Outward: velocities and accelerations of each link origin, in its own frame.
-  detail::LinkMotion motion;
-  motion.dv = -gravity;   // a base accelerating upwards stands in for gravity (Craig sec. 6.5)
+  Vector3 w = Vector3::Zero(), dw = Vector3::Zero();
+  Vector3 dv = -gravity;   // a base accelerating upwards stands in for gravity (Craig sec. 6.5)
   for (int i = 0; i < kNumJoints; ++i) {
-    detail::step_outward(model, data, i, dq[i], ddq[i], motion);
-    const Vector3 &w = motion.w, &dw = motion.dw, &dv = motion.dv;
+    const JointGeometry& joint = model.joint(i);
+    const double c = data.cos_theta[i], s = data.sin_theta[i];
+    const Vector3& p = joint.origin;
+    const Vector3 dv_parent_at_origin = dw.cross(p) + w.cross(w.cross(p)) + dv;
+    const Vector3 w_parent = joint.rotate_back(c, s, w);
+    w = w_parent + dq[i] * z;                                                // eq. 6.45
+    dw = joint.rotate_back(c, s, dw) + w_parent.cross(dq[i] * z) + ddq[i] * z;  // eq. 6.46
+    dv = joint.rotate_back(c, s, dv_parent_at_origin);                        // eq. 6.47
 
     // Net force and moment about the origin (eqs. 6.48-6.50 with h = m c, I_O = I_C - m [c]x^2).
     const SpatialInertia& I = model.body(i);

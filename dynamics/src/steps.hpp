@@ -15,26 +15,6 @@ inline void update_joint_angles(const Model& model, Data& data, const Vector7& q
   joint_sin_cos(theta, data.sin_theta, data.cos_theta);
 }
 
-// Angular velocity, angular acceleration and linear acceleration of a link origin, in the link's frame.
-struct LinkMotion {
-  Vector3 w = Vector3::Zero(), dw = Vector3::Zero(), dv = Vector3::Zero();
-};
-
-// One outward step of Newton-Euler (Craig eqs. 6.45-6.47): `motion` goes from link i's parent to
-// link i, with joint i turning at dq_i, ddq_i. data's joint angles must be current.
-inline void step_outward(const Model& model, const Data& data, int i, double dq_i, double ddq_i, LinkMotion& motion) {
-  const Vector3 z = Vector3::UnitZ();
-  const JointGeometry& joint = model.joint(i);
-  const double c = data.cos_theta[i], s = data.sin_theta[i];
-  const Vector3& p = joint.origin;
-  Vector3 &w = motion.w, &dw = motion.dw, &dv = motion.dv;
-  const Vector3 dv_parent_at_origin = dw.cross(p) + w.cross(w.cross(p)) + dv;
-  const Vector3 w_parent = joint.rotate_back(c, s, w);
-  w = w_parent + dq_i * z;                                                  // eq. 6.45
-  dw = joint.rotate_back(c, s, dw) + w_parent.cross(dq_i * z) + ddq_i * z;  // eq. 6.46
-  dv = joint.rotate_back(c, s, dv_parent_at_origin);                        // eq. 6.47
-}
-
 // The joint part of forward_kinematics: data.O_T_joint and data.axis (src/kinematics.cpp).
 void update_joint_frames(const Model& model, Data& data, const Vector7& q);
 
