@@ -17,6 +17,7 @@
 //   Gravity            gravity_torque                      ChainDynParam::JntToGravity
 //   Coriolis           coriolis_torque (C(q,dq) dq)        ChainDynParam::JntToCoriolis
 //   CoriolisMatrix     coriolis_matrix                     none: KDL has no Coriolis matrix
+//   Regressor          InertialRegressor (7 x 70)          none: KDL has no inertial regressor
 //   MassMatrix         crba                                ChainDynParam::JntToMass
 //   ForwardDynamics    aba                                 ChainFdSolver_RNE::CartToJnt (KDL 1.5:
 //                                                          JntToMass + RNE bias + LDL^T solve)
@@ -26,6 +27,7 @@
 
 #include "bench_common.hpp"
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/regressor.hpp"
 #include "csp/io/robot_config.hpp"
 
 namespace csp::bench {
@@ -130,6 +132,19 @@ void BM_CoriolisMatrix_CSP(benchmark::State& state) {
   }
 }
 
+// No KDL twin: the 7 x 70 inertial regressor Y(q, dq, ddq) of the excitation design and the gap fits.
+void BM_Regressor_CSP(benchmark::State& state) {
+  const States& s = states();
+  const InertialRegressor regressor(model());
+  Data data;
+  StateCycle cycle;
+  for (auto _ : state) {
+    const std::size_t k = cycle();
+    InertialRegressorRows Y = regressor(data, s.q[k], s.dq[k], s.ddq[k]);
+    benchmark::DoNotOptimize(Y);
+  }
+}
+
 // ---- Mass matrix, forward dynamics --------------------------------------------------------------
 
 void BM_MassMatrix_CSP(benchmark::State& state) {
@@ -183,6 +198,7 @@ void register_benchmarks() {
       {"BM_Coriolis_CSP", BM_Coriolis_CSP},
       {"BM_Coriolis_KDL", BM_Coriolis_KDL},
       {"BM_CoriolisMatrix_CSP", BM_CoriolisMatrix_CSP},
+      {"BM_Regressor_CSP", BM_Regressor_CSP},
       {"BM_MassMatrix_CSP", BM_MassMatrix_CSP},
       {"BM_MassMatrix_KDL", BM_MassMatrix_KDL},
       {"BM_ForwardDynamics_CSP", BM_ForwardDynamics_CSP},

@@ -6,7 +6,7 @@ namespace csp {
 // the base frame, so no inertia is ever transformed between links).
 void aba(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& tau,
          const LinkWrenches& f_ext) {
-  forward_kinematics(model, data, q);
+  detail::update_joint_frames(model, data, q);   // the flange, EE and K frames are not needed
   detail::update_base_inertias(model, data);
   detail::update_base_velocities(data, dq);
 

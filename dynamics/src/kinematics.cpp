@@ -12,8 +12,8 @@ int moving_joints(Frame frame) {
 
 }  // namespace
 
-void forward_kinematics(const Model& model, Data& data, const Vector7& q) {
-  detail::update_joint_angles(model, data, q);
+void detail::update_joint_frames(const Model& model, Data& data, const Vector7& q) {
+  update_joint_angles(model, data, q);
   Transform O_T_i;
   for (int i = 0; i < kNumJoints; ++i) {
     O_T_i = O_T_i * model.joint(i).transform(data.cos_theta[i], data.sin_theta[i]);
@@ -22,8 +22,12 @@ void forward_kinematics(const Model& model, Data& data, const Vector7& q) {
     const Vector3 z = O_T_i.rotation.col(2);
     data.axis[i] = linear_angular(O_T_i.translation.cross(z), z);
   }
+}
+
+void forward_kinematics(const Model& model, Data& data, const Vector7& q) {
+  detail::update_joint_frames(model, data, q);
   const ModelParameters& p = model.parameters();
-  data.O_T_F = O_T_i * p.link7_T_flange;
+  data.O_T_F = data.O_T_joint[kNumJoints - 1] * p.link7_T_flange;
   data.O_T_EE = data.O_T_F * p.F_T_EE;
   data.O_T_K = data.O_T_EE * p.EE_T_K;
 }

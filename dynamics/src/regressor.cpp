@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "csp/dynamics/algorithms.hpp"
+#include "steps.hpp"
 
 namespace csp {
 
@@ -106,33 +107,65 @@ LinkParameters to_log_cholesky(const LinkParameters& p) {
 
 namespace {
 
-// The model with the load lumped into link 7 and link `link`'s standard parameters moved by delta.
-Model with_link_parameters(const Model& model, int link, const LinkParameters& delta) {
-  ModelParameters p = model.parameters();
-  p.end_effector = p.load = RigidBodyInertia{};
-  for (int i = 0; i < kNumJoints; ++i) {
-    const LinkParameters value = link_parameters(model.body(i)) + (i == link ? delta : LinkParameters::Zero());
-    p.links[i] = rigid_body(spatial_inertia(value));
-  }
-  return Model(p);
+using LinkRegressor = Eigen::Matrix<double, 6, kLinkParameters>;   // (force; moment) per parameter
+
+// L(a) with I a = L(a) (Ixx, Ixy, Ixz, Iyy, Iyz, Izz) for a symmetric I.
+Eigen::Matrix<double, 3, 6> inertia_product(const Vector3& a) {
+  Eigen::Matrix<double, 3, 6> L;
+  L << a.x(), a.y(), a.z(), 0.0, 0.0, 0.0,  //
+      0.0, a.x(), 0.0, a.y(), a.z(), 0.0,    //
+      0.0, 0.0, a.x(), 0.0, a.y(), a.z();
+  return L;
+}
+
+// The net wrench of one link about its origin, linear in its standard parameters (Atkeson, An and
+// Hollerbach 1986): with w, dw and dv (gravity included) of the link origin in the link frame,
+//   f = m dv + ([dw]x + [w]x [w]x) h,    n = -[dv]x h + L(dw) I + [w]x L(w) I
+// (the Newton-Euler equations of rnea.cpp, term by term).
+LinkRegressor link_regressor(const Vector3& w, const Vector3& dw, const Vector3& dv) {
+  LinkRegressor A = LinkRegressor::Zero();
+  A.block<3, 1>(0, 0) = dv;
+  A.block<3, 3>(0, 1) = skew(dw) + skew(w) * skew(w);
+  A.block<3, 3>(3, 1) = -skew(dv);
+  A.block<3, 6>(3, 4) = inertia_product(dw) + skew(w) * inertia_product(w);
+  return A;
 }
 
 }  // namespace
 
-InertialRegressor::InertialRegressor(const Model& model) : nominal_(model) {
-  perturbed_.reserve(kInertialParameters);
-  for (int k = 0; k < kInertialParameters; ++k)
-    perturbed_.push_back(with_link_parameters(model, k / kLinkParameters, LinkParameters::Unit(k % kLinkParameters)));
-}
+InertialRegressor::InertialRegressor(const Model& model) : model_(model) {}
 
+// Outward the link kinematics as in rnea (Craig eqs. 6.45-6.47); then each link's 6x10 wrench
+// regressor is carried inward like a wrench (Craig eqs. 6.51-6.53), column by column, and the joint
+// torque rows are its moments' z components: Y(j, link i) = e_z . (^jX*_i A_i) for j <= i.
 InertialRegressorRows InertialRegressor::operator()(Data& data, const Vector7& q, const Vector7& dq,
                                                     const Vector7& ddq) const {
-  Vector7 tau0, tau;
-  rnea(nominal_, data, q, dq, ddq, tau0);
-  InertialRegressorRows Y;
-  for (int k = 0; k < kInertialParameters; ++k) {
-    rnea(perturbed_[k], data, q, dq, ddq, tau);
-    Y.col(k) = tau - tau0;
+  detail::update_joint_angles(model_, data, q);
+  const Vector3 z = Vector3::UnitZ();
+  Vector3 w = Vector3::Zero(), dw = Vector3::Zero(), dv = -model_.gravity();
+  InertialRegressorRows Y = InertialRegressorRows::Zero();
+  for (int i = 0; i < kNumJoints; ++i) {
+    const JointGeometry& joint = model_.joint(i);
+    const double c = data.cos_theta[i], s = data.sin_theta[i];
+    const Vector3& p = joint.origin;
+    const Vector3 dv_parent_at_origin = dw.cross(p) + w.cross(w.cross(p)) + dv;
+    const Vector3 w_parent = joint.rotate_back(c, s, w);
+    w = w_parent + dq[i] * z;
+    dw = joint.rotate_back(c, s, dw) + w_parent.cross(dq[i] * z) + ddq[i] * z;
+    dv = joint.rotate_back(c, s, dv_parent_at_origin);
+
+    LinkRegressor A = link_regressor(w, dw, dv);
+    for (int j = i;; --j) {
+      Y.block<1, kLinkParameters>(j, kLinkParameters * i) = A.row(5);
+      if (j == 0) break;
+      const JointGeometry& child = model_.joint(j);
+      const double cj = data.cos_theta[j], sj = data.sin_theta[j];
+      for (int k = 0; k < kLinkParameters; ++k) {
+        const Vector3 force = child.rotate(cj, sj, A.block<3, 1>(0, k));
+        A.block<3, 1>(3, k) = child.rotate(cj, sj, A.block<3, 1>(3, k)) + child.origin.cross(force);
+        A.block<3, 1>(0, k) = force;
+      }
+    }
   }
   return Y;
 }

@@ -15,12 +15,15 @@ inline void update_joint_angles(const Model& model, Data& data, const Vector7& q
   joint_sin_cos(theta, data.sin_theta, data.cos_theta);
 }
 
-// After forward_kinematics: every body's spatial inertia in the base frame.
+// The joint part of forward_kinematics: data.O_T_joint and data.axis (src/kinematics.cpp).
+void update_joint_frames(const Model& model, Data& data, const Vector7& q);
+
+// After update_joint_frames: every body's spatial inertia in the base frame.
 inline void update_base_inertias(const Model& model, Data& data) {
   for (int i = 0; i < kNumJoints; ++i) data.O_inertia[i] = model.body(i).expressed_in(data.O_T_joint[i]);
 }
 
-// After forward_kinematics: body velocities v_i = v_{i-1} + S_i dq_i and the velocity-product
+// After update_joint_frames: body velocities v_i = v_{i-1} + S_i dq_i and the velocity-product
 // accelerations c_i = v_i x S_i dq_i (in base coordinates dS_i/dt = v_i x S_i, Featherstone sec. 2.12).
 inline void update_base_velocities(Data& data, const Vector7& dq) {
   Vector6 v = Vector6::Zero();

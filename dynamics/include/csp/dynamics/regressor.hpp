@@ -42,16 +42,17 @@ Eigen::Matrix<double, kLinkParameters, kLinkParameters> from_log_cholesky_jacobi
 // Throws std::domain_error when p is not physically consistent.
 LinkParameters to_log_cholesky(const LinkParameters& p);
 
-// tau = Y(q, dq, ddq) pi. Column k is the RNEA torque of the model with standard parameter k
-// increased by one minus that of the model itself: exact because the torque is linear in pi.
+// tau = Y(q, dq, ddq) pi (the armature's I_a ddq aside): the Newton-Euler recursion of rnea with
+// each link's wrench written as its 6x10 regressor, carried inward column by column. Column k is
+// the torque that standard parameter k contributes per unit, what rnea of the model with that
+// parameter increased by one gives minus rnea of the model itself (tests/test_dynamics_fast.cpp).
 class InertialRegressor {
  public:
   explicit InertialRegressor(const Model& model);
   InertialRegressorRows operator()(Data& data, const Vector7& q, const Vector7& dq, const Vector7& ddq) const;
 
  private:
-  Model nominal_;
-  std::vector<Model> perturbed_;  // kInertialParameters models
+  Model model_;   // kinematics and gravity; its inertias are not read
 };
 
 // Identifiable combinations of the standard parameters: the independent columns of the regressor
