@@ -237,6 +237,18 @@ try {
         `the run keeps its cycles with a page attached (${cycles(live.child.output)} vs ${cycles(plain)}; ` +
         `${/lost commands \d+/.exec(live.child.output)} with the page, ${/lost commands \d+/.exec(plain)} without)`);
 
+  // A bus's run (csp serve, no controller: the robot idles) is shown live too, and its end said.
+  {
+    const bus = await serve(["serve", "default", "--clock", "realtime", "--duration", "8", "--view", "--view-port", "0",
+                             "--lcm-url", "udpm://239.255.76.67:7699?ttl=0"]);
+    const busPage = await openPage(bus.url, "palette=flat&meshes=collision");
+    await busPage.waitForFunction(() => document.getElementById("message").textContent.includes("the run ended"), null, { timeout: 60000 });
+    const busFrames = await busPage.evaluate(() => window.cspView.frames.length);
+    check(busFrames >= 5, `csp serve --view: the page got the bus's run (${busFrames} frames) and its end`);
+    await busPage.close();
+    await bus.child.exited;
+  }
+
   // 3. The run's process dies under the page: the page says so.
   const dying = await serve(["emulate", "default", "--clock", "realtime", "--duration", "20", "--view", "--view-port", "0"]);
   const orphan = await openPage(dying.url, "palette=flat&meshes=collision");
