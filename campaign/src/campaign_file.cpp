@@ -1,0 +1,119 @@
+#include "csp/campaign/campaign_file.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+
+#include "csp/campaign/cases.hpp"
+#include "csp/campaign/runner.hpp"
+#include "csp/io/yaml_field.hpp"
+
+namespace csp::campaign {
+namespace {
+
+// The base scenario: a path relative to the campaign file, or a shipped scenario's name.
+std::string base_scenario(const Field& field, const std::string& campaign_path) {
+  const std::string text = field.text();
+  std::filesystem::path path = text;
+  if (text.find('/') == std::string::npos && path.extension() != ".yaml") path = rt::shipped_scenario_path(text);
+  else if (path.is_relative()) path = std::filesystem::path(campaign_path).parent_path() / path;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    field.fail("a scenario file or a shipped scenario's name (" + path.string() + " not found)");
+  return std::filesystem::absolute(path).lexically_normal().string();
+}
+
+Axis read_axis(const Field& field) {
+  field.allow_only({"parameter", "values", "uniform", "normal"});
+  Axis axis;
+  axis.parameter = field["parameter"].text();
+  const int ways = int(field.has("values")) + int(field.has("uniform")) + int(field.has("normal"));
+  if (ways != 1) field.fail("exactly one of values (a grid), uniform [low, high] or normal {mean, sd, low, high}");
+  if (field.has("values")) {
+    const Field values = field["values"];
+    if (values.sequence_size() == 0) values.fail("a list of at least one number");
+    for (std::size_t i = 0; i < values.sequence_size(); ++i) axis.values.push_back(values[i].number());
+  } else if (field.has("uniform")) {
+    const Field range = field["uniform"];
+    if (range.sequence_size() != 2) range.fail("[low, high]");
+    axis.kind = Axis::Kind::kUniform;
+    axis.low = range[0].number();
+    axis.high = range[1].number();
+    if (!(axis.low < axis.high)) range.fail("[low, high] with low < high");
+  } else {
+    const Field normal = field["normal"];
+    normal.allow_only({"mean", "sd", "low", "high"});
+    axis.kind = Axis::Kind::kNormal;
+    axis.mean = normal["mean"].number();
+    axis.sd = positive(normal["sd"]);
+    axis.low = normal["low"].number();
+    axis.high = normal["high"].number();
+    if (!(axis.low <= axis.mean && axis.mean <= axis.high) || axis.low == axis.high)
+      normal.fail("low <= mean <= high with low < high (the draws are clipped to [low, high])");
+  }
+  return axis;
+}
+
+// A value the axis takes, to check that its parameter applies to the base scenario.
+double some_value(const Axis& axis) {
+  return axis.kind == Axis::Kind::kValues ? axis.values.front() : axis.kind == Axis::Kind::kUniform ? axis.low : axis.mean;
+}
+
+}  // namespace
+
+Campaign load_campaign(const std::string& path) {
+  const YAML::Node root = load_yaml_file(path, "campaign file");
+  const Field file(root, path, "");
+  file.allow_only({"name", "description", "base", "duration", "seed", "runs", "axes", "fail_if", "worst_by"});
+  Campaign campaign;
+  campaign.path = path;
+  campaign.base = base_scenario(file["base"], path);
+  if (file.has("duration")) {
+    campaign.duration = positive(file["duration"]);
+    if (*campaign.duration > rt::kMaxDuration) file["duration"].fail("at most a year of seconds");
+  }
+  if (file.has("seed")) campaign.seed = static_cast<uint64_t>(file["seed"].whole_number(0, int64_t{1} << 53));
+  if (file.has("runs")) campaign.runs = static_cast<int>(file["runs"].whole_number(1, 1'000'000));
+
+  // Every parameter is applied once to the base scenario: an unknown name is this file's error.
+  rt::Scenario scenario = rt::load_scenario(campaign.base);
+  const Field axes = file["axes"];
+  std::set<std::string> seen;
+  std::size_t grid = 1;
+  for (std::size_t i = 0; i < axes.sequence_size(); ++i) {
+    const Axis axis = read_axis(axes[i]);
+    if (!seen.insert(axis.parameter).second) axes[i]["parameter"].fail("a parameter not swept by another axis");
+    try {
+      apply_parameter(scenario, axis.parameter, some_value(axis));
+    } catch (const std::invalid_argument& e) {
+      axes[i]["parameter"].fail(e.what());
+    }
+    if (axis.kind == Axis::Kind::kValues) grid *= axis.values.size();
+    if (grid * static_cast<std::size_t>(campaign.runs) > 1'000'000) axes[i].fail("at most a million cases in all");
+    campaign.axes.push_back(axis);
+  }
+
+  const std::vector<std::string> metrics = metric_names(scenario);
+  auto check_metric = [&](const Field& field, const std::string& name) {
+    if (std::find(metrics.begin(), metrics.end(), name) != metrics.end()) return;
+    std::string list;
+    for (const std::string& m : metrics) list += (list.empty() ? "" : ", ") + m;
+    field.fail("a metric of this scenario (" + list + ")");
+  };
+  if (file.has("fail_if")) {
+    const Field limits = file["fail_if"];
+    for (const std::string& name : limits.keys()) {
+      check_metric(limits[name], name);
+      campaign.limits[name] = limits[name].number();
+    }
+  }
+  campaign.worst_by = metrics.front();
+  if (file.has("worst_by")) {
+    campaign.worst_by = file["worst_by"].text();
+    check_metric(file["worst_by"], campaign.worst_by);
+  }
+  return campaign;
+}
+
+}  // namespace csp::campaign
