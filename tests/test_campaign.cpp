@@ -159,9 +159,12 @@ TEST(Campaign, AKilledCampaignResumedLosesNothingAndRepeatsNothing) {
     }
     return done;
   };
-  while (done_files().size() < 3) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  kill(-pid, SIGKILL);
   int status = 0;
+  while (done_files().size() < 3) {
+    ASSERT_EQ(waitpid(pid, &status, WNOHANG), 0) << "the campaign ended before it was killed";
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  kill(-pid, SIGKILL);
   waitpid(pid, &status, 0);
   const auto before = done_files();
   ASSERT_LT(before.size(), 24u) << "the campaign ended before it was killed";
