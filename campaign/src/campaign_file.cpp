@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <stdexcept>
+
+#include <nlohmann/json.hpp>
 
 #include "csp/campaign/cases.hpp"
 #include "csp/campaign/runner.hpp"
@@ -24,13 +27,47 @@ std::string base_scenario(const Field& field, const std::string& campaign_path) 
   return std::filesystem::absolute(path).lexically_normal().string();
 }
 
+// `gap: {verdict: FILE, cause: NAME, value: KEY, joint: N}`: the 95 % interval a `csp gap --json`
+// verdict gives one of its causes' fitted values (verdict.params.NAME.KEY_interval, joint N's for a
+// per-joint value): the range the real robot's parameter lies in, as far as its log tells.
+void read_gap_interval(const Field& field, Axis& axis) {
+  field.allow_only({"verdict", "cause", "value", "joint"});
+  std::filesystem::path path = field["verdict"].text();
+  if (path.is_relative()) path = std::filesystem::path(field.file()).parent_path() / path;
+  std::ifstream in(path);
+  if (!in) field["verdict"].fail("a `csp gap --json` verdict file (" + path.string() + " cannot be read)");
+  const nlohmann::json verdict = nlohmann::json::parse(in, nullptr, false);
+  if (verdict.is_discarded() || !verdict.contains("verdict") || !verdict["verdict"].contains("params"))
+    field["verdict"].fail("a `csp gap --json` verdict file (" + path.string() + " has no verdict.params)");
+  const std::string cause = field["cause"].text(), value = field["value"].text();
+  const nlohmann::json& params = verdict["verdict"]["params"];
+  if (!params.contains(cause) || !params[cause].is_object()) field["cause"].fail("a cause of the verdict (" + path.string() + ")");
+  const std::string key = value + "_interval";
+  if (!params[cause].contains(key)) field["value"].fail("a fitted value of " + cause + " with an interval (no " + key + ")");
+  nlohmann::json interval = params[cause][key];
+  if (field.has("joint")) {
+    const int64_t joint = field["joint"].whole_number(1, kNumJoints);
+    if (!interval.is_array() || interval.size() != kNumJoints) field["joint"].fail("no joint: " + key + " is not per joint");
+    interval = interval[static_cast<std::size_t>(joint - 1)];
+  }
+  if (!interval.is_array() || interval.size() != 2 || !interval[0].is_number() || !interval[1].is_number())
+    field["value"].fail("a value whose interval is [low, high] (" + key + ": " + interval.dump() + "; per joint: give joint)");
+  axis.kind = Axis::Kind::kUniform;
+  axis.low = interval[0].get<double>();
+  axis.high = interval[1].get<double>();
+  if (!(axis.low < axis.high)) field.fail("an interval with low < high (" + key + ": " + interval.dump() + ")");
+}
+
 Axis read_axis(const Field& field) {
-  field.allow_only({"parameter", "values", "uniform", "normal"});
+  field.allow_only({"parameter", "values", "uniform", "normal", "gap"});
   Axis axis;
   axis.parameter = field["parameter"].text();
-  const int ways = int(field.has("values")) + int(field.has("uniform")) + int(field.has("normal"));
-  if (ways != 1) field.fail("exactly one of values (a grid), uniform [low, high] or normal {mean, sd, low, high}");
-  if (field.has("values")) {
+  const int ways = int(field.has("values")) + int(field.has("uniform")) + int(field.has("normal")) + int(field.has("gap"));
+  if (ways != 1)
+    field.fail("exactly one of values (a grid), uniform [low, high], normal {mean, sd, low, high} or gap {verdict, cause, value, joint}");
+  if (field.has("gap")) {
+    read_gap_interval(field["gap"], axis);
+  } else if (field.has("values")) {
     const Field values = field["values"];
     if (values.sequence_size() == 0) values.fail("a list of at least one number");
     for (std::size_t i = 0; i < values.sequence_size(); ++i) axis.values.push_back(values[i].number());

@@ -116,6 +116,15 @@ void apply_parameter(rt::Scenario& scenario, const std::string& parameter, doubl
     plant.load.mass = non_negative();
   } else if (prefixed("plant.armature.")) {
     plant.armature[joint_index(parameter, parameter.substr(15))] = non_negative();
+  } else if (prefixed("plant.friction.phi")) {
+    // plant.friction.phi1.jN [N m], phi2.jN [s/rad], phi3.jN [rad/s]: the Gaz law's (gap's joint_friction).
+    require(plant.friction.type == FrictionModel::Type::kGazSigmoid, parameter, "used with a plant whose friction is Gaz's law");
+    const std::string rest = parameter.substr(18);   // "1.j4"
+    require(rest.size() == 4 && rest[0] >= '1' && rest[0] <= '3' && rest[1] == '.', parameter, "plant.friction.phi1|phi2|phi3.jN");
+    Vector7& phi = rest[0] == '1' ? plant.friction.phi1 : rest[0] == '2' ? plant.friction.phi2 : plant.friction.phi3;
+    if (rest[0] == '1') require(value >= 0.0, parameter, "non-negative");
+    if (rest[0] == '2') require(value > 0.0, parameter, "positive");
+    phi[joint_index(parameter, rest.substr(2))] = value;
   } else if (prefixed("sensor.tau_J_bias.")) {
     scenario.emulator.tau_J_bias[joint_index(parameter, parameter.substr(18))] = value;
   } else if (parameter == "controller.stiffness_scale" || parameter == "controller.damping_scale") {

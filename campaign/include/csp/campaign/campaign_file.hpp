@@ -18,7 +18,8 @@ struct Axis {
   std::string parameter;
   Kind kind = Kind::kValues;
   std::vector<double> values;   // kValues: a grid axis (every case of the grid takes each value)
-  double low = 0.0, high = 0.0;  // kUniform: drawn in [low, high); kNormal: the draw is clipped to it
+  // kUniform: drawn in [low, high) (given, or a `csp gap` verdict's interval); kNormal: clipped to it
+  double low = 0.0, high = 0.0;
   double mean = 0.0, sd = 0.0;   // kNormal
 };
 

@@ -29,6 +29,7 @@ std::vector<Case> expand_cases(const Campaign& campaign);
 //   plant.mass_scale, plant.armature_scale, plant.friction_scale   the arm's, not the robot's model
 //   plant.load_mass                       [kg] a payload the robot's model does not know
 //   plant.armature.jN                     [kg m^2] joint N's rotor inertia (plant)
+//   plant.friction.phi1|phi2|phi3.jN      joint N's Gaz friction law (N m, s/rad, rad/s; the plant's)
 //   sensor.tau_J_bias.jN                  [N m] joint N's torque-sensor offset
 //   controller.stiffness_scale, controller.damping_scale   joint impedance gains, scaled
 //   controller.<number>                   translational_stiffness, rotational_stiffness, desired_force,
