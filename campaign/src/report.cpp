@@ -56,7 +56,7 @@ std::string axis_figure(const CampaignDir& campaign, const std::vector<Row>& row
     rate.x.push_back(bin.centre());
     rate.y.push_back(100.0 * bin.failed / bin.runs);
   }
-  rate.points = rate.x.size() == 1;
+  rate.points = bins.front().low == bins.front().high;   // a grid's values: dots, not a line between them
   PlotSeries held{"held", "#2ca02c", {}, {}, true}, failed{"failed", "#d62728", {}, {}, true};
   for (const Row& row : rows) {
     const double value = metric_of(row.outcome, campaign.campaign.worst_by);
