@@ -43,7 +43,7 @@ int print_collected(const campaign::CampaignDir& dir) {
 
 int print_status(const campaign::CampaignDir& dir) {
   const campaign::Status status = campaign::campaign_status(dir);
-  std::printf("csp campaign: %s: %d of %d cases done, %d failed (worker died), %d to run\n", dir.dir.c_str(), status.done,
+  std::printf("csp campaign: %s: %d of %d cases done, %d failed (see below), %d to run\n", dir.dir.c_str(), status.done,
               status.total, status.failed, status.total - status.done - status.failed);
   for (const std::string& failure : status.failures) std::printf("  failed %s\n", failure.c_str());
   if (std::filesystem::exists(dir.dir + "/slurm/job_id"))
@@ -66,8 +66,8 @@ int run_campaign(const CampaignArguments& args) {
     return 0;
   }
   ProgressMeter progress("csp campaign", args.progress);
-  const int ran = campaign::run_cases(dir, args.jobs, 0, 1, progress.callback());
-  progress.finish(format("ran %d cases", ran));
+  const campaign::CasesRun run = campaign::run_cases(dir, args.jobs, 0, 1, progress.callback());
+  progress.finish(format("ran %d cases, %d failed", run.ran, run.failed));
   const campaign::Status after = campaign::campaign_status(dir);
   for (const std::string& failure : after.failures) std::printf("  failed %s\n", failure.c_str());
   return print_collected(dir);
@@ -103,9 +103,9 @@ Command add_campaign_command(CLI::App& app) {
     if (work->parsed()) {
       if (args->task >= args->tasks) throw UsageError("--task: expected a number below --tasks");
       const campaign::CampaignDir dir = campaign::open_campaign(args->dir);
-      const int ran = campaign::run_cases(dir, args->jobs > 0 ? args->jobs : 1, args->task, args->tasks, {});
-      std::printf("csp campaign work: task %d of %d ran %d cases\n", args->task, args->tasks, ran);
-      return campaign_status(dir).failed ? 1 : 0;
+      const campaign::CasesRun run = campaign::run_cases(dir, args->jobs > 0 ? args->jobs : 1, args->task, args->tasks, {});
+      std::printf("csp campaign work: task %d of %d ran %d cases, %d failed\n", args->task, args->tasks, run.ran, run.failed);
+      return run.failed ? 1 : 0;
     }
     return run_campaign(*args);
   };

@@ -1,6 +1,7 @@
 // `csp campaign` (docs/campaign.md): the campaign's table against the same cases run one by one in
 // this process (bit-identical metrics), a killed campaign resumed (nothing lost, nothing run
-// twice), a task's slice and the collection of a partial campaign, and bad campaign files.
+// twice), a task's slice and the collection of a partial campaign, a case that fails (marked with
+// why, run again on resume), and bad campaign files.
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -186,7 +187,7 @@ TEST(Campaign, ATaskRunsItsSliceAndACollectionSaysWhatIsMissing) {
   const std::string dir = scratch_dir("slice");
   const std::string file = small_campaign(dir);
   const csp::campaign::CampaignDir prepared = csp::campaign::prepare_campaign(file, dir + "/out");
-  EXPECT_EQ(csp::campaign::run_cases(prepared, 1, 1, 4, {}), 6);   // indices 1, 5, 9, ...
+  EXPECT_EQ(csp::campaign::run_cases(prepared, 1, 1, 4, {}).ran, 6);   // indices 1, 5, 9, ...
   const csp::campaign::Status status = csp::campaign::campaign_status(prepared);
   EXPECT_EQ(status.total, 24);
   EXPECT_EQ(status.done, 6);
@@ -196,10 +197,37 @@ TEST(Campaign, ATaskRunsItsSliceAndACollectionSaysWhatIsMissing) {
   std::vector<std::string> header;
   EXPECT_EQ(table_rows(dir + "/out", header).size(), 6u);
   // The rest, and the same folder refuses another campaign.
-  EXPECT_EQ(csp::campaign::run_cases(prepared, 2, 0, 1, {}), 18);
+  EXPECT_EQ(csp::campaign::run_cases(prepared, 2, 0, 1, {}).ran, 18);
   EXPECT_EQ(run_csp("campaign status " + dir + "/out"), 0);
   write_file(file, read_file(file) + "worst_by: max_tau_ext\n");
   EXPECT_THROW(csp::campaign::prepare_campaign(file, dir + "/out"), std::runtime_error);
+  fs::remove_all(dir);
+}
+
+TEST(Campaign, ACaseThatFailsIsMarkedWithWhyAndRunAgainOnResume) {
+  // The base scenario is a copy that disappears after the cases are prepared: every worker fails.
+  const std::string dir = scratch_dir("failing");
+  std::string scenario = read_file(CSP_SOURCE_DIR "/configs/scenarios/default.yaml");
+  scenario.replace(scenario.find("../robots/panda.yaml"), 20, CSP_SOURCE_DIR "/configs/robots/panda.yaml");
+  write_file(dir + "/base.yaml", scenario);
+  const std::string file = write_file(dir + "/campaign.yaml", "base: base.yaml\nduration: 0.5\nruns: 3\naxes: []\n");
+  const csp::campaign::CampaignDir prepared = csp::campaign::prepare_campaign(file, dir + "/out");
+  fs::rename(dir + "/base.yaml", dir + "/moved.yaml");
+  const csp::campaign::CasesRun failing = csp::campaign::run_cases(prepared, 2, 0, 1, {});
+  EXPECT_EQ(failing.ran, 3);
+  EXPECT_EQ(failing.failed, 3);
+  const csp::campaign::Status status = csp::campaign::campaign_status(prepared);
+  EXPECT_EQ(status.done, 0);
+  ASSERT_EQ(status.failures.size(), 3u);
+  EXPECT_NE(status.failures[0].find("c0000: "), std::string::npos);
+  EXPECT_NE(status.failures[0].find("base.yaml"), std::string::npos) << status.failures[0];   // the loader's error
+  // Back in place: the failed cases run again, and pass.
+  fs::rename(dir + "/moved.yaml", dir + "/base.yaml");
+  const csp::campaign::CasesRun resumed = csp::campaign::run_cases(prepared, 2, 0, 1, {});
+  EXPECT_EQ(resumed.ran, 3);
+  EXPECT_EQ(resumed.failed, 0);
+  EXPECT_EQ(csp::campaign::campaign_status(prepared).done, 3);
+  EXPECT_EQ(csp::campaign::campaign_status(prepared).failed, 0);
   fs::remove_all(dir);
 }
 

@@ -100,6 +100,24 @@ void apply_parameter(rt::Scenario& scenario, const std::string& parameter, doubl
   auto prefixed = [&](const std::string& prefix) { return parameter.rfind(prefix, 0) == 0; };
   auto non_negative = [&] { require(value >= 0.0, parameter, "non-negative"); return value; };
 
+  // The plain numbers, each set as given (>= 0).
+  const std::pair<const char*, double*> numbers[] = {
+      {"plant.load_mass", &plant.load.mass},
+      {"controller.translational_stiffness", &controller.translational_stiffness},
+      {"controller.rotational_stiffness", &controller.rotational_stiffness},
+      {"controller.desired_force", &medical.desired_force},
+      {"controller.force_k_p", &medical.force_k_p},
+      {"controller.force_k_i", &medical.force_k_i},
+      {"controller.axis_damping", &medical.axis_damping},
+      {"controller.null_space_stiffness", &medical.null_space_stiffness},
+      {"faults.latency_mean_us", &scenario.command_faults.latency_mean_us},
+      {"faults.latency_jitter_us", &scenario.command_faults.latency_jitter_us}};
+  for (const auto& [name, field] : numbers) {
+    if (parameter != name) continue;
+    *field = non_negative();
+    return;
+  }
+
   if (parameter == "seed") {
     require(value >= 0.0 && value == std::floor(value) && value < 9007199254740992.0, parameter, "a whole number >= 0");
     scenario.seed = static_cast<uint64_t>(value);
@@ -112,8 +130,6 @@ void apply_parameter(rt::Scenario& scenario, const std::string& parameter, doubl
     plant.armature *= non_negative();
   } else if (parameter == "plant.friction_scale") {
     scale_friction(plant.friction, non_negative());
-  } else if (parameter == "plant.load_mass") {
-    plant.load.mass = non_negative();
   } else if (prefixed("plant.armature.")) {
     plant.armature[joint_index(parameter, parameter.substr(15))] = non_negative();
   } else if (prefixed("plant.friction.phi")) {
@@ -131,27 +147,9 @@ void apply_parameter(rt::Scenario& scenario, const std::string& parameter, doubl
     require(controller.type == "joint_impedance" || (controller.type == "float" && parameter == "controller.damping_scale"),
             parameter, "used with a joint_impedance controller, not " + controller.type);
     (parameter == "controller.stiffness_scale" ? controller.stiffness : controller.damping) *= non_negative();
-  } else if (parameter == "controller.translational_stiffness") {
-    controller.translational_stiffness = non_negative();
-  } else if (parameter == "controller.rotational_stiffness") {
-    controller.rotational_stiffness = non_negative();
-  } else if (parameter == "controller.desired_force") {
-    medical.desired_force = non_negative();
-  } else if (parameter == "controller.force_k_p") {
-    medical.force_k_p = non_negative();
-  } else if (parameter == "controller.force_k_i") {
-    medical.force_k_i = non_negative();
-  } else if (parameter == "controller.axis_damping") {
-    medical.axis_damping = non_negative();
-  } else if (parameter == "controller.null_space_stiffness") {
-    medical.null_space_stiffness = non_negative();
   } else if (parameter == "faults.loss_probability") {
     require(value >= 0.0 && value <= 1.0, parameter, "a probability from 0 to 1");
     scenario.command_faults.loss_probability = value;
-  } else if (parameter == "faults.latency_mean_us") {
-    scenario.command_faults.latency_mean_us = non_negative();
-  } else if (parameter == "faults.latency_jitter_us") {
-    scenario.command_faults.latency_jitter_us = non_negative();
   } else if (prefixed("scene.")) {
     apply_scene_parameter(scenario, parameter, value);
   } else {

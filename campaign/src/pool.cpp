@@ -62,7 +62,7 @@ void log_run(const CampaignDir& campaign, const Case& c, double wall_time_s) {
                               static_cast<int>(getpid()), wall_time_s);
   const int fd = ::open((campaign.dir + "/runs.log").c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
   if (fd < 0) return;   // the log is a record for people; the result is what counts
-  if (::write(fd, line, static_cast<std::size_t>(n)) != n) { /* the same */ }
+  [[maybe_unused]] const ssize_t written = ::write(fd, line, static_cast<std::size_t>(n));   // the same
   ::close(fd);
 }
 
@@ -135,7 +135,7 @@ Status campaign_status(const CampaignDir& campaign) {
   return status;
 }
 
-int run_cases(const CampaignDir& campaign, int jobs, int task, int tasks, const Progress& progress) {
+CasesRun run_cases(const CampaignDir& campaign, int jobs, int task, int tasks, const Progress& progress) {
   if (jobs <= 0) jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::vector<const Case*> pending;
   for (const Case& c : campaign.cases)
@@ -143,6 +143,7 @@ int run_cases(const CampaignDir& campaign, int jobs, int task, int tasks, const 
 
   std::map<pid_t, const Case*> running;
   std::size_t next = 0, finished = 0;
+  CasesRun count;
   report(progress, "cases", 0, static_cast<double>(pending.size()));
   while (next < pending.size() || !running.empty()) {
     while (next < pending.size() && static_cast<int>(running.size()) < jobs) {
@@ -165,11 +166,14 @@ int run_cases(const CampaignDir& campaign, int jobs, int task, int tasks, const 
     const Case& c = *worker->second;
     running.erase(worker);
     // A worker killed from outside (out of memory, a signal) left no result: say so.
-    if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0) && !fs::exists(failed_path(campaign, c)))
-      write_atomically(failed_path(campaign, c), describe_exit(status) + "\n");
+    if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
+      ++count.failed;
+      if (!fs::exists(failed_path(campaign, c))) write_atomically(failed_path(campaign, c), describe_exit(status) + "\n");
+    }
     report(progress, "cases", static_cast<double>(++finished), static_cast<double>(pending.size()));
   }
-  return static_cast<int>(pending.size());
+  count.ran = static_cast<int>(pending.size());
+  return count;
 }
 
 }  // namespace csp::campaign

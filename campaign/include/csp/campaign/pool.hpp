@@ -34,7 +34,10 @@ struct Status {
 Status campaign_status(const CampaignDir& campaign);
 
 // Runs the cases not yet done whose index i has i % tasks == task (all of them: task 0 of 1), at
-// most `jobs` at a time. Progress counts finished cases. Returns how many it ran.
-int run_cases(const CampaignDir& campaign, int jobs, int task, int tasks, const Progress& progress);
+// most `jobs` at a time (0: one per core). Progress counts finished cases.
+struct CasesRun {
+  int ran = 0, failed = 0;   // failed: its worker threw or died (runs/<id>.failed says why)
+};
+CasesRun run_cases(const CampaignDir& campaign, int jobs, int task, int tasks, const Progress& progress);
 
 }  // namespace csp::campaign
