@@ -231,6 +231,29 @@ TEST(Campaign, ACaseThatFailsIsMarkedWithWhyAndRunAgainOnResume) {
   fs::remove_all(dir);
 }
 
+TEST(Campaign, AScenarioAxisRunsEachBaseScenario) {
+  const std::string dir = scratch_dir("scenarios");
+  const std::string file = write_file(dir + "/campaign.yaml",
+                                      "duration: 0.5\naxes:\n"
+                                      "  - {parameter: scenario, values: [default, libfranka_panda]}\n"
+                                      "  - {parameter: plant.load_mass, values: [0, 1]}\n");
+  const csp::campaign::CampaignDir prepared = csp::campaign::prepare_campaign(file, dir + "/out");
+  ASSERT_EQ(prepared.cases.size(), 4u);
+  const std::string names[] = {"default", "default", "libfranka_panda", "libfranka_panda"};
+  for (const Case& c : prepared.cases) {
+    const std::string& name = names[c.index];
+    EXPECT_EQ(csp::campaign::case_scenario(prepared.campaign, c).name,
+              csp::rt::load_scenario(csp::rt::shipped_scenario_path(name)).name) << c.id;
+  }
+  EXPECT_EQ(csp::campaign::run_cases(prepared, 2, 0, 1, {}).ran, 4);
+  EXPECT_EQ(run_csp("campaign collect " + dir + "/out"), 0);
+  std::vector<std::string> header;
+  const auto rows = table_rows(dir + "/out", header);
+  ASSERT_EQ(header[2], "scenario");
+  for (const Case& c : prepared.cases) EXPECT_EQ(rows.at(c.id)[2], names[c.index]) << c.id;
+  fs::remove_all(dir);
+}
+
 TEST(Campaign, ABadCampaignFileIsOneErrorNamingItsKey) {
   const std::string dir = scratch_dir("bad");
   const std::string base = "base: " CSP_SOURCE_DIR "/configs/scenarios/default.yaml\n";
@@ -256,6 +279,10 @@ TEST(Campaign, ABadCampaignFileIsOneErrorNamingItsKey) {
   EXPECT_EQ(error_of(base + "axes:\n  - {parameter: scene.material.skin.stiffness, values: [1000]}\n"),
             dir + "/bad.yaml: axes[0].parameter: expected a scenario with a scene for `scene.material.skin.stiffness`");
   EXPECT_EQ(error_of(base + "axes: []\nfail_if: {force_error: 1}\n").rfind(dir + "/bad.yaml: fail_if.force_error: expected a metric of this scenario (tracking_error_rms, ", 0), 0u);
+  EXPECT_EQ(error_of(base + "axes:\n  - {parameter: scenario, values: [default]}\n"),
+            dir + "/bad.yaml: base: expected no base with a `scenario` axis (its values are the base scenarios)");
+  EXPECT_EQ(error_of("axes:\n  - {parameter: scenario, values: [default, medical/ultrasound_abdomen_scan]}\n"),
+            dir + "/bad.yaml: axes[0].values[1]: expected a scenario whose runs have the metrics of the first (the same kind of task, or none)");
   EXPECT_EQ(error_of(base + "axes: []\nrepeats: 3\n").rfind(dir + "/bad.yaml: repeats: expected no such key", 0), 0u);
   // The command says it in one line and exits with 2.
   EXPECT_EQ(run_csp("campaign " + dir + "/bad.yaml --out " + dir + "/out 2> /dev/null"), 2);

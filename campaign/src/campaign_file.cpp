@@ -15,13 +15,14 @@
 namespace csp::campaign {
 namespace {
 
-// The base scenario: a path relative to the campaign file, or a shipped scenario's name.
+// A base scenario: a path relative to the campaign file, or a shipped scenario's name
+// (configs/scenarios/: default, medical/ultrasound_abdomen_scan).
 std::string base_scenario(const Field& field, const std::string& campaign_path) {
   const std::string text = field.text();
   std::filesystem::path path = text;
-  if (text.find('/') == std::string::npos && path.extension() != ".yaml") path = rt::shipped_scenario_path(text);
-  else if (path.is_relative()) path = std::filesystem::path(campaign_path).parent_path() / path;
+  if (path.is_relative()) path = std::filesystem::path(campaign_path).parent_path() / path;
   std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error) && path.extension() != ".yaml") path = rt::shipped_scenario_path(text);
   if (!std::filesystem::is_regular_file(path, error))
     field.fail("a scenario file or a shipped scenario's name (" + path.string() + " not found)");
   return std::filesystem::absolute(path).lexically_normal().string();
@@ -99,13 +100,33 @@ double some_value(const Axis& axis) {
 
 }  // namespace
 
+// `{parameter: scenario, values: [FILE or NAME, ...]}`: the base scenarios, as a grid axis of their indices.
+Axis read_scenario_axis(const Field& field, std::vector<std::string>& scenarios) {
+  field.allow_only({"parameter", "values"});
+  const Field values = field["values"];
+  if (values.sequence_size() == 0) values.fail("a list of scenario files or shipped scenarios' names");
+  Axis axis;
+  axis.parameter = "scenario";
+  for (std::size_t i = 0; i < values.sequence_size(); ++i) {
+    scenarios.push_back(base_scenario(values[i], field.file()));
+    axis.values.push_back(static_cast<double>(i));
+  }
+  return axis;
+}
+
 Campaign load_campaign(const std::string& path) {
   const YAML::Node root = load_yaml_file(path, "campaign file");
   const Field file(root, path, "");
   file.allow_only({"name", "description", "base", "duration", "seed", "runs", "axes", "fail_if", "worst_by"});
   Campaign campaign;
   campaign.path = path;
-  campaign.base = base_scenario(file["base"], path);
+  const Field axes = file["axes"];
+  std::vector<std::size_t> scenario_axes;
+  for (std::size_t i = 0; i < axes.sequence_size(); ++i)
+    if (axes[i].has("parameter") && axes[i]["parameter"].text() == "scenario") scenario_axes.push_back(i);
+  if (scenario_axes.size() > 1) axes[scenario_axes[1]]["parameter"].fail("one `scenario` axis");
+  if (scenario_axes.empty()) campaign.scenarios.push_back(base_scenario(file["base"], path));
+  else if (file.has("base")) file["base"].fail("no base with a `scenario` axis (its values are the base scenarios)");
   if (file.has("duration")) {
     campaign.duration = positive(file["duration"]);
     if (*campaign.duration > rt::kMaxDuration) file["duration"].fail("at most a year of seconds");
@@ -113,25 +134,33 @@ Campaign load_campaign(const std::string& path) {
   if (file.has("seed")) campaign.seed = static_cast<uint64_t>(file["seed"].whole_number(0, int64_t{1} << 53));
   if (file.has("runs")) campaign.runs = static_cast<int>(file["runs"].whole_number(1, 1'000'000));
 
-  // Every parameter is applied once to the base scenario: an unknown name is this file's error.
-  rt::Scenario scenario = rt::load_scenario(campaign.base);
-  const Field axes = file["axes"];
-  std::set<std::string> seen;
-  std::size_t grid = 1;
+  // Every parameter is applied once to each base scenario: an unknown name is this file's error.
+  std::vector<rt::Scenario> bases;
+  if (!scenario_axes.empty()) campaign.axes.push_back(read_scenario_axis(axes[scenario_axes[0]], campaign.scenarios));
+  for (const std::string& scenario : campaign.scenarios) bases.push_back(rt::load_scenario(scenario));
+  std::set<std::string> seen{"scenario"};
+  std::size_t grid = campaign.scenarios.size();
   for (std::size_t i = 0; i < axes.sequence_size(); ++i) {
+    if (!scenario_axes.empty() && i == scenario_axes[0]) continue;
     const Axis axis = read_axis(axes[i]);
     if (!seen.insert(axis.parameter).second) axes[i]["parameter"].fail("a parameter not swept by another axis");
-    try {
-      apply_parameter(scenario, axis.parameter, some_value(axis));
-    } catch (const std::invalid_argument& e) {
-      axes[i]["parameter"].fail(e.what());
+    for (rt::Scenario& scenario : bases) {
+      try {
+        apply_parameter(scenario, axis.parameter, some_value(axis));
+      } catch (const std::invalid_argument& e) {
+        axes[i]["parameter"].fail(e.what());
+      }
     }
     if (axis.kind == Axis::Kind::kValues) grid *= axis.values.size();
     if (grid * static_cast<std::size_t>(campaign.runs) > 1'000'000) axes[i].fail("at most a million cases in all");
     campaign.axes.push_back(axis);
   }
 
-  const std::vector<std::string> metrics = metric_names(scenario);
+  // One table: every base scenario's runs measure the same (all with the same kind of scene task, or none).
+  const std::vector<std::string> metrics = metric_names(bases.front());
+  for (std::size_t i = 1; i < bases.size(); ++i)
+    if (metric_names(bases[i]) != metrics)
+      axes[scenario_axes[0]]["values"][i].fail("a scenario whose runs have the metrics of the first (the same kind of task, or none)");
   auto check_metric = [&](const Field& field, const std::string& name) {
     if (std::find(metrics.begin(), metrics.end(), name) != metrics.end()) return;
     std::string list;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -192,17 +193,25 @@ std::vector<Case> expand_cases(const Campaign& campaign) {
 }
 
 rt::Scenario case_scenario(const Campaign& campaign, const Case& c) {
-  rt::Scenario scenario = rt::load_scenario(campaign.base);
+  std::size_t base = 0;
+  for (const auto& [parameter, value] : c.parameters)
+    if (parameter == "scenario") base = static_cast<std::size_t>(value);
+  rt::Scenario scenario = rt::load_scenario(campaign.scenarios.at(base));
   if (campaign.duration) scenario.duration = *campaign.duration;
   apply_parameter(scenario, "seed", static_cast<double>(c.seed));
-  for (const auto& [parameter, value] : c.parameters) apply_parameter(scenario, parameter, value);
+  for (const auto& [parameter, value] : c.parameters)
+    if (parameter != "scenario") apply_parameter(scenario, parameter, value);
   return scenario;
+}
+
+std::string scenario_name(const Campaign& campaign, double index) {
+  return std::filesystem::path(campaign.scenarios.at(static_cast<std::size_t>(index))).stem().string();
 }
 
 std::string cases_json(const Campaign& campaign, const std::vector<Case>& cases) {
   nlohmann::ordered_json j;
   j["campaign_file"] = campaign.path;
-  j["base"] = campaign.base;
+  j["scenarios"] = campaign.scenarios;
   j["duration"] = campaign.duration ? nlohmann::ordered_json(*campaign.duration) : nlohmann::ordered_json(nullptr);
   j["seed"] = campaign.seed;
   j["runs"] = campaign.runs;
@@ -226,7 +235,7 @@ void read_cases_json(const std::string& path, Campaign& campaign, std::vector<Ca
     const nlohmann::ordered_json j = nlohmann::ordered_json::parse(in);
     campaign = Campaign{};
     campaign.path = j.at("campaign_file").get<std::string>();
-    campaign.base = j.at("base").get<std::string>();
+    campaign.scenarios = j.at("scenarios").get<std::vector<std::string>>();
     if (!j.at("duration").is_null()) campaign.duration = j.at("duration").get<double>();
     campaign.seed = j.at("seed").get<uint64_t>();
     campaign.runs = j.at("runs").get<int>();

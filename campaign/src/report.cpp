@@ -51,10 +51,12 @@ std::vector<Bin> bins_of(const std::vector<Row>& rows, std::size_t axis) {
 std::string axis_figure(const CampaignDir& campaign, const std::vector<Row>& rows, std::size_t axis, const std::vector<Bin>& bins) {
   const std::string& parameter = campaign.campaign.axes[axis].parameter;
   PlotSeries rate{"failure rate", "#d62728", {}, {}, false};
+  std::vector<std::string> scenarios;   // the scenario axis's names
   for (const Bin& bin : bins) {
     if (bin.runs == 0) continue;
     rate.x.push_back(bin.centre());
     rate.y.push_back(100.0 * bin.failed / bin.runs);
+    if (parameter == "scenario") scenarios.push_back(scenario_name(campaign.campaign, bin.low));
   }
   rate.points = bins.front().low == bins.front().high;   // a grid's values: dots, not a line between them
   PlotSeries held{"held", "#2ca02c", {}, {}, true}, failed{"failed", "#d62728", {}, {}, true};
@@ -65,8 +67,11 @@ std::string axis_figure(const CampaignDir& campaign, const std::vector<Row>& row
     series.x.push_back(row.c->parameters[axis].second);
     series.y.push_back(value);
   }
+  // The scenario axis: a bar per scenario against 100 %.
+  const PlotPanel rate_panel = scenarios.empty() ? PlotPanel{"failure rate", parameter, "runs failed [%]", {rate}, {}, 0.0}
+                                                 : PlotPanel{"failure rate", "runs failed [%]", parameter, {rate}, scenarios, 100.0};
   return render_panels("campaign: failure rate against " + parameter,
-                       {{"failure rate", parameter, "runs failed [%]", {rate}, {}},
+                       {rate_panel,
                         {campaign.campaign.worst_by + " of each run", parameter, campaign.campaign.worst_by, {held, failed}, {}}},
                        2);
 }
@@ -99,7 +104,8 @@ void write_report(const CampaignDir& campaign, const std::vector<Row>& rows, int
   for (const Row& row : rows) failed += row.outcome.failed ? 1 : 0;
 
   std::string md = "# Campaign report\n\n";
-  md += format("- campaign: `%s`\n- base scenario: `%s`\n", file.path.c_str(), file.base.c_str());
+  md += format("- campaign: `%s`\n", file.path.c_str());
+  for (const std::string& scenario : file.scenarios) md += format("- base scenario: `%s`\n", scenario.c_str());
   md += format("- cases: %zu; run: %zu; missing: %d\n", campaign.cases.size(), rows.size(), missing);
   md += format("- failed: %d of %zu (%.1f %%): a reflex", failed, rows.size(), rows.empty() ? 0.0 : 100.0 * failed / rows.size());
   for (const auto& [metric, limit] : file.limits) md += format(", or %s > %g", metric.c_str(), limit);
@@ -111,7 +117,9 @@ void write_report(const CampaignDir& campaign, const std::vector<Row>& rows, int
     md += format("\n### `%s`\n\n![](%s)\n\n| value | runs | failed | rate |\n|---|---|---|---|\n",
                  file.axes[axis].parameter.c_str(), figure.c_str());
     for (const Bin& bin : bins) {
-      const std::string value = bin.low == bin.high ? format("%g", bin.low) : format("%.4g to %.4g", bin.low, bin.high);
+      const std::string value = file.axes[axis].parameter == "scenario" ? scenario_name(file, bin.low)
+                                : bin.low == bin.high                   ? format("%g", bin.low)
+                                                                        : format("%.4g to %.4g", bin.low, bin.high);
       md += format("| %s | %d | %d | %s |\n", value.c_str(), bin.runs, bin.failed,
                    bin.runs ? format("%.0f %%", 100.0 * bin.failed / bin.runs).c_str() : "-");
     }
@@ -133,7 +141,10 @@ void write_report(const CampaignDir& campaign, const std::vector<Row>& rows, int
                file.worst_by.c_str(), file.worst_by.c_str());
   for (std::size_t i = 0; i < worst.size() && i < kWorstRuns; ++i) {
     std::string parameters;
-    for (const auto& [name, value] : worst[i]->c->parameters) parameters += format("%s%s = %.6g", parameters.empty() ? "" : ", ", name.c_str(), value);
+    for (const auto& [name, value] : worst[i]->c->parameters) {
+      const std::string shown = name == "scenario" ? scenario_name(file, value) : format("%.6g", value);
+      parameters += format("%s%s = %s", parameters.empty() ? "" : ", ", name.c_str(), shown.c_str());
+    }
     md += format("| %s | %s | %.6g | %s |\n", worst[i]->c->id.c_str(), parameters.c_str(),
                  metric_of(worst[i]->outcome, file.worst_by), worst[i]->outcome.failure.c_str());
   }

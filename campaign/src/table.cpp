@@ -61,7 +61,8 @@ Collected collect_results(const CampaignDir& campaign) {
     if (o.metrics.size() != rows.front().outcome.metrics.size())
       throw std::runtime_error(campaign.dir + "/runs/" + o.id + ".json: other metrics than the other runs'");
     std::vector<std::string> fields{row.c->id, std::to_string(row.c->seed)};
-    for (const auto& parameter : row.c->parameters) fields.push_back(csv_number(parameter.second));
+    for (const auto& [name, value] : row.c->parameters)
+      fields.push_back(name == "scenario" ? csv_field(scenario_name(campaign.campaign, value)) : csv_number(value));
     fields.insert(fields.end(), {o.reflex ? "1" : "0", o.failed ? "1" : "0"});
     for (const auto& metric : o.metrics) fields.push_back(csv_number(metric.second));
     fields.insert(fields.end(), {csv_field(o.reflex_errors), csv_field(o.failure), format("%.6f", o.wall_time_s)});

@@ -12,7 +12,8 @@
 
 namespace csp::campaign {
 
-// One swept parameter (cases.hpp lists the names). Exactly one way of choosing its values:
+// One swept parameter (cases.hpp lists the names; `scenario`: which base scenario). Exactly one way
+// of choosing its values:
 struct Axis {
   enum class Kind { kValues, kUniform, kNormal };
   std::string parameter;
@@ -25,7 +26,9 @@ struct Axis {
 
 struct Campaign {
   std::string path;            // the campaign file
-  std::string base;            // the base scenario (absolute)
+  // The base scenario (absolute), or a `scenario` axis's alternatives: that axis's values are
+  // indices into this list (a grid axis).
+  std::vector<std::string> scenarios;
   std::optional<double> duration;   // overrides the scenario's [s]
   uint64_t seed = 1;           // each case's seed derives from it and the case's index
   int runs = 1;                // cases per point of the grid (random axes drawn anew each)
