@@ -101,14 +101,15 @@ double some_value(const Axis& axis) {
 }  // namespace
 
 // `{parameter: scenario, values: [FILE or NAME, ...]}`: the base scenarios, as a grid axis of their indices.
-Axis read_scenario_axis(const Field& field, std::vector<std::string>& scenarios) {
+Axis read_scenario_axis(const Field& field, Campaign& campaign) {
   field.allow_only({"parameter", "values"});
   const Field values = field["values"];
   if (values.sequence_size() == 0) values.fail("a list of scenario files or shipped scenarios' names");
   Axis axis;
   axis.parameter = "scenario";
   for (std::size_t i = 0; i < values.sequence_size(); ++i) {
-    scenarios.push_back(base_scenario(values[i], field.file()));
+    campaign.scenarios.push_back(base_scenario(values[i], field.file()));
+    campaign.scenario_names.push_back(values[i].text());
     axis.values.push_back(static_cast<double>(i));
   }
   return axis;
@@ -136,7 +137,7 @@ Campaign load_campaign(const std::string& path) {
 
   // Every parameter is applied once to each base scenario: an unknown name is this file's error.
   std::vector<rt::Scenario> bases;
-  if (!scenario_axes.empty()) campaign.axes.push_back(read_scenario_axis(axes[scenario_axes[0]], campaign.scenarios));
+  if (!scenario_axes.empty()) campaign.axes.push_back(read_scenario_axis(axes[scenario_axes[0]], campaign));
   for (const std::string& scenario : campaign.scenarios) bases.push_back(rt::load_scenario(scenario));
   std::set<std::string> seen{"scenario"};
   std::size_t grid = campaign.scenarios.size();

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -205,13 +204,14 @@ rt::Scenario case_scenario(const Campaign& campaign, const Case& c) {
 }
 
 std::string scenario_name(const Campaign& campaign, double index) {
-  return std::filesystem::path(campaign.scenarios.at(static_cast<std::size_t>(index))).stem().string();
+  return campaign.scenario_names.at(static_cast<std::size_t>(index));
 }
 
 std::string cases_json(const Campaign& campaign, const std::vector<Case>& cases) {
   nlohmann::ordered_json j;
   j["campaign_file"] = campaign.path;
   j["scenarios"] = campaign.scenarios;
+  j["scenario_names"] = campaign.scenario_names;
   j["duration"] = campaign.duration ? nlohmann::ordered_json(*campaign.duration) : nlohmann::ordered_json(nullptr);
   j["seed"] = campaign.seed;
   j["runs"] = campaign.runs;
@@ -236,6 +236,7 @@ void read_cases_json(const std::string& path, Campaign& campaign, std::vector<Ca
     campaign = Campaign{};
     campaign.path = j.at("campaign_file").get<std::string>();
     campaign.scenarios = j.at("scenarios").get<std::vector<std::string>>();
+    campaign.scenario_names = j.at("scenario_names").get<std::vector<std::string>>();
     if (!j.at("duration").is_null()) campaign.duration = j.at("duration").get<double>();
     campaign.seed = j.at("seed").get<uint64_t>();
     campaign.runs = j.at("runs").get<int>();

@@ -29,6 +29,7 @@ struct Campaign {
   // The base scenario (absolute), or a `scenario` axis's alternatives: that axis's values are
   // indices into this list (a grid axis).
   std::vector<std::string> scenarios;
+  std::vector<std::string> scenario_names;   // the `scenario` axis's values as written (the table's)
   std::optional<double> duration;   // overrides the scenario's [s]
   uint64_t seed = 1;           // each case's seed derives from it and the case's index
   int runs = 1;                // cases per point of the grid (random axes drawn anew each)

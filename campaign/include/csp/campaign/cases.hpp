@@ -42,7 +42,7 @@ void apply_parameter(rt::Scenario& scenario, const std::string& parameter, doubl
 // The scenario of a case: its base (the `scenario` axis's, else the one) loaded afresh (a tissue
 // keeps its state), the duration and the case's seed and parameters applied.
 rt::Scenario case_scenario(const Campaign& campaign, const Case& c);
-// The `scenario` axis's value `index` as the table shows it: the scenario file's name without .yaml.
+// The `scenario` axis's value `index` as the table shows it: as the campaign file wrote it.
 std::string scenario_name(const Campaign& campaign, double index);
 
 // cases.json: the campaign and its expanded cases, what every worker (a Slurm task on another
