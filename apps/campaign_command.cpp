@@ -54,6 +54,9 @@ int print_status(const campaign::CampaignDir& dir) {
 int run_campaign(const CampaignArguments& args) {
   if (args.file.empty()) throw UsageError("expected a campaign file (csp campaign FILE --out DIR), or status, work, collect");
   if (args.out.empty()) throw UsageError("--out: expected the campaign's folder");
+  const campaign::SlurmOptions& slurm = args.slurm_options;
+  if (!args.slurm && (!slurm.partition.empty() || !slurm.time.empty() || slurm.array_size > 0))
+    throw UsageError("--partition, --time and --array-size are options of --slurm");
   const campaign::CampaignDir dir = campaign::prepare_campaign(args.file, args.out);
   const campaign::Status before = campaign::campaign_status(dir);
   std::printf("csp campaign: %s: %zu cases, %d already done\n", args.file.c_str(), dir.cases.size(), before.done);
@@ -96,6 +99,7 @@ Command add_campaign_command(CLI::App& app) {
   work->add_option("dir", args->dir, "The campaign's folder")->required();
   work->add_option("--task", args->task, "This task's index")->required()->check(CLI::NonNegativeNumber);
   work->add_option("--tasks", args->tasks, "The number of tasks")->required()->check(CLI::PositiveNumber);
+  work->add_option("--jobs", args->jobs, "Cases run at once (default 1)")->check(CLI::Range(1, 4096));
 
   return [args, status, collect, work] {
     if (status->parsed()) return print_status(campaign::open_campaign(args->dir));

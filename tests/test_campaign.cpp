@@ -254,6 +254,22 @@ TEST(Campaign, AScenarioAxisRunsEachBaseScenario) {
   fs::remove_all(dir);
 }
 
+TEST(Campaign, TheShippedCampaignsLoad) {
+  // The excitation campaign reads designs made first (its comment): not here.
+  const std::pair<const char*, std::size_t> shipped[] = {{"joint_impedance_real_gap.yaml", 64}, {"ultrasound_tissue.yaml", 20}};
+  for (const auto& [name, cases] : shipped) {
+    const csp::campaign::Campaign campaign = csp::campaign::load_campaign(std::string(CSP_SOURCE_DIR "/configs/campaigns/") + name);
+    const std::vector<Case> expanded = csp::campaign::expand_cases(campaign);
+    EXPECT_EQ(expanded.size(), cases) << name;
+    // The gap axes draw inside the verdict's intervals (joint 4's phi1: [0.905, 1.506] N m).
+    for (const Case& c : expanded) {
+      for (const auto& [parameter, value] : c.parameters) {
+        if (parameter == "plant.friction.phi1.j4") EXPECT_TRUE(value >= 0.905 && value <= 1.506) << value;
+      }
+    }
+  }
+}
+
 TEST(Campaign, ABadCampaignFileIsOneErrorNamingItsKey) {
   const std::string dir = scratch_dir("bad");
   const std::string base = "base: " CSP_SOURCE_DIR "/configs/scenarios/default.yaml\n";
