@@ -95,9 +95,13 @@ TEST(Campaign, TwoWorkersGiveTheRowsOfTheCasesRunOneByOne) {
   const std::string file = small_campaign(dir);
   ASSERT_EQ(run_csp("campaign " + file + " --out " + dir + "/out --jobs 2"), 0);
 
-  const csp::campaign::Campaign campaign = csp::campaign::load_campaign(file);
-  const std::vector<Case> cases = csp::campaign::expand_cases(campaign);
+  // The cases as the campaign expanded them (cases.json: what its workers ran; the draws are made
+  // once, so that workers built with other flags run the same values), run here one by one.
+  const csp::campaign::CampaignDir prepared = csp::campaign::open_campaign(dir + "/out");
+  const csp::campaign::Campaign& campaign = prepared.campaign;
+  const std::vector<Case>& cases = prepared.cases;
   ASSERT_EQ(cases.size(), 24u);
+  EXPECT_EQ(cases.size(), csp::campaign::expand_cases(csp::campaign::load_campaign(file)).size());
   std::vector<std::string> header;
   const auto rows = table_rows(dir + "/out", header);
   ASSERT_EQ(rows.size(), cases.size());
