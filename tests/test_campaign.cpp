@@ -235,12 +235,14 @@ TEST(Campaign, ACaseThatFailsIsMarkedWithWhyAndRunAgainOnResume) {
   fs::remove_all(dir);
 }
 
+// ... and the table keeps the metrics the file chose.
 TEST(Campaign, AScenarioAxisRunsEachBaseScenario) {
   const std::string dir = scratch_dir("scenarios");
   const std::string file = write_file(dir + "/campaign.yaml",
                                       "duration: 0.5\naxes:\n"
                                       "  - {parameter: scenario, values: [default, libfranka_panda]}\n"
-                                      "  - {parameter: plant.load_mass, values: [0, 1]}\n");
+                                      "  - {parameter: plant.load_mass, values: [0, 1]}\n"
+                                      "metrics: [tracking_error_max, lost_commands]\n");
   const csp::campaign::CampaignDir prepared = csp::campaign::prepare_campaign(file, dir + "/out");
   ASSERT_EQ(prepared.cases.size(), 4u);
   const std::string names[] = {"default", "default", "libfranka_panda", "libfranka_panda"};
@@ -253,7 +255,8 @@ TEST(Campaign, AScenarioAxisRunsEachBaseScenario) {
   EXPECT_EQ(run_csp("campaign collect " + dir + "/out"), 0);
   std::vector<std::string> header;
   const auto rows = table_rows(dir + "/out", header);
-  ASSERT_EQ(header[2], "scenario");
+  EXPECT_EQ(header, (std::vector<std::string>{"id", "case_seed", "scenario", "plant.load_mass", "reflex", "failed",
+                                              "tracking_error_max", "lost_commands", "reflex_errors", "failure", "wall_time_s"}));
   for (const Case& c : prepared.cases) EXPECT_EQ(rows.at(c.id)[2], names[c.index]) << c.id;
   fs::remove_all(dir);
 }
@@ -304,6 +307,7 @@ TEST(Campaign, ABadCampaignFileIsOneErrorNamingItsKey) {
             dir + "/bad.yaml: base: expected no base with a `scenario` axis (its values are the base scenarios)");
   EXPECT_EQ(error_of("axes:\n  - {parameter: scenario, values: [default, medical/ultrasound_abdomen_scan]}\n"),
             dir + "/bad.yaml: axes[0].values[1]: expected a scenario whose runs have the metrics of the first (the same kind of task, or none)");
+  EXPECT_EQ(error_of(base + "axes: []\nmetrics: [tracking_error_max, clearance]\n").rfind(dir + "/bad.yaml: metrics[1]: expected a metric of this scenario (", 0), 0u);
   EXPECT_EQ(error_of(base + "axes: []\nrepeats: 3\n").rfind(dir + "/bad.yaml: repeats: expected no such key", 0), 0u);
   // The command says it in one line and exits with 2.
   EXPECT_EQ(run_csp("campaign " + dir + "/bad.yaml --out " + dir + "/out 2> /dev/null"), 2);

@@ -118,7 +118,7 @@ Axis read_scenario_axis(const Field& field, Campaign& campaign) {
 Campaign load_campaign(const std::string& path) {
   const YAML::Node root = load_yaml_file(path, "campaign file");
   const Field file(root, path, "");
-  file.allow_only({"name", "description", "base", "duration", "seed", "runs", "axes", "fail_if", "worst_by"});
+  file.allow_only({"name", "description", "base", "duration", "seed", "runs", "axes", "fail_if", "worst_by", "metrics"});
   Campaign campaign;
   campaign.path = path;
   const Field axes = file["axes"];
@@ -173,6 +173,13 @@ Campaign load_campaign(const std::string& path) {
     for (const std::string& name : limits.keys()) {
       check_metric(limits[name], name);
       campaign.limits[name] = limits[name].number();
+    }
+  }
+  if (file.has("metrics")) {
+    const Field kept = file["metrics"];
+    for (std::size_t i = 0; i < kept.sequence_size(); ++i) {
+      check_metric(kept[i], kept[i].text());
+      campaign.kept.push_back(kept[i].text());
     }
   }
   campaign.worst_by = metrics.front();

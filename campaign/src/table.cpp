@@ -1,5 +1,6 @@
 #include "csp/campaign/table.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <stdexcept>
@@ -52,8 +53,17 @@ Collected collect_results(const CampaignDir& campaign) {
   std::vector<std::string> header{"id", "case_seed"};
   for (const Axis& axis : campaign.campaign.axes) header.push_back(csv_field(axis.parameter));
   header.insert(header.end(), {"reflex", "failed"});
-  if (!rows.empty())
-    for (const auto& metric : rows.front().outcome.metrics) header.push_back(metric.first);
+  // The kept metrics (all unless the file chose), by their index in every row.
+  const auto& kept = campaign.campaign.kept;
+  std::vector<std::size_t> columns;
+  if (!rows.empty()) {
+    const auto& metrics = rows.front().outcome.metrics;
+    for (std::size_t i = 0; i < metrics.size(); ++i) {
+      if (!kept.empty() && std::find(kept.begin(), kept.end(), metrics[i].first) == kept.end()) continue;
+      columns.push_back(i);
+      header.push_back(metrics[i].first);
+    }
+  }
   header.insert(header.end(), {"reflex_errors", "failure", "wall_time_s"});
   std::string csv = csv_line(header);
   for (const Row& row : rows) {
@@ -64,7 +74,7 @@ Collected collect_results(const CampaignDir& campaign) {
     for (const auto& [name, value] : row.c->parameters)
       fields.push_back(name == "scenario" ? csv_field(scenario_name(campaign.campaign, value)) : csv_number(value));
     fields.insert(fields.end(), {o.reflex ? "1" : "0", o.failed ? "1" : "0"});
-    for (const auto& metric : o.metrics) fields.push_back(csv_number(metric.second));
+    for (const std::size_t i : columns) fields.push_back(csv_number(o.metrics[i].second));
     fields.insert(fields.end(), {csv_field(o.reflex_errors), csv_field(o.failure), format("%.6f", o.wall_time_s)});
     csv += csv_line(fields);
   }

@@ -37,6 +37,7 @@ struct Campaign {
   // A run fails on a reflex, or when a metric exceeds its limit here (metric name -> largest value held).
   std::map<std::string, double> limits;
   std::string worst_by;        // the metric that ranks the worst runs in the report
+  std::vector<std::string> kept;   // the metrics results.csv keeps (empty: all; runs/<id>.json has all)
 };
 
 // Throws ConfigError (file: key: expected ...) for a bad file.
