@@ -25,6 +25,7 @@ Command add_can_command(CLI::App& app);
 Command add_fci_command(CLI::App& app);
 Command add_plan_command(CLI::App& app);
 Command add_view_command(CLI::App& app);
+Command add_campaign_command(CLI::App& app);
 
 // The most samples `csp workspace` and `csp demo` take: a billion take about 7 minutes (400 ns
 // each) and make --points a 60 GB file; the reach statistics and density maps settle long before
