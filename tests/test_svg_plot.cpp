@@ -178,7 +178,8 @@ TEST(SvgPlot, LimitChartsAxisEndsAtTheLimit) {
   // The plot's frame, and the bars in the joints' order (filled rectangles inside the frame).
   const Element* frame = nullptr;
   std::vector<Element> bars;
-  for (const Element& e : elements_named(all, "rect")) {
+  const std::vector<Element> rects = elements_named(all, "rect");   // kept: `frame` points into it
+  for (const Element& e : rects) {
     if (e.attributes.count("stroke") && e.attributes.at("fill") == "none") frame = &e;
     else if (e.attributes.count("x")) bars.push_back(e);
   }

@@ -181,7 +181,7 @@ def check_reflex(options, server):
     only_one(results, "recovered")
     if only_one(results, "second_motion") != "finished" or code != 0:
         raise CheckFailed(f"the motion after automaticErrorRecovery did not finish (exit code {code})")
-    if "reflex" not in server.output():
+    if not server.wait_for("reflex"):
         raise CheckFailed("csp fci's diagnostics do not mention the reflex")
 
 
@@ -200,7 +200,7 @@ def check_incompatible(options, server):
                           f"the robot speaks {robot_version}")
     if code == 0:
         raise CheckFailed("the refused client ended with exit code 0")
-    if "refused" not in server.output():
+    if not server.wait_for("refused"):
         raise CheckFailed("csp fci's diagnostics do not mention the refused client")
 
 

@@ -154,6 +154,16 @@ class Server:
     def output(self):
         return "".join(self.lines)
 
+    def wait_for(self, text, timeout_s=10.0):
+        """True once `text` is in csp fci's output: a line it writes after answering a client may
+        come after the client has ended."""
+        deadline = time.monotonic() + timeout_s
+        while text not in self.output():
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.02)
+        return True
+
     def wait_until_listening(self):
         deadline = time.monotonic() + LISTEN_TIMEOUT_S
         while not self.listening.wait(0.05):

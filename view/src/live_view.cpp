@@ -44,6 +44,7 @@ void LiveView::send_frames() {
 }
 
 void LiveView::send_frame(const rt::RobotState& state, bool command_received) {
+  last_sent_ms_ = state.time.toMSec();
   JointLog row;
   rt::append_state(row, state, command_received);
   nlohmann::json frame = model_.frame(row, 0);
@@ -63,8 +64,8 @@ void LiveView::stop() {
 }
 
 void LiveView::finish(const rt::RobotState& last_state, const std::string& how) {
-  stop();
-  send_frame(last_state, false);
+  stop();   // the sender has ended: last_sent_ms_ is this thread's now
+  if (last_state.time.toMSec() != last_sent_ms_) send_frame(last_state, false);
   server_.broadcast(nlohmann::json{{"type", "end"}, {"text", how}, {"recording", server_.has_recording()}}.dump());
 }
 

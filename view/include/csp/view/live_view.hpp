@@ -31,7 +31,8 @@ class LiveView : public run::Observer {
 
   void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override;
 
-  // The run is over: the sender stops, the pages get the robot's last state and then
+  // The run is over: the sender stops, the pages get the robot's last state (unless it was the last
+  // frame sent) and then
   // {"type": "end", "text": how, "recording": whether the server has the whole run to load}.
   void finish(const rt::RobotState& last_state, const std::string& how);
 
@@ -55,6 +56,7 @@ class LiveView : public run::Observer {
   bool stopping_ = false;
 
   std::atomic<uint64_t> frames_sent_{0};
+  uint64_t last_sent_ms_ = UINT64_MAX;   // robot time of the last frame made (the sender's, then finish's)
   std::thread sender_;
 };
 
