@@ -111,8 +111,12 @@ json ViewModel::description() const {
 }
 
 std::optional<Clearance> ViewModel::clearance(const Vector7& q, double t) {
-  if (!world_) return std::nullopt;
   forward_kinematics(model_, data_, q);
+  return closest_obstacle(t);
+}
+
+std::optional<Clearance> ViewModel::closest_obstacle(double t) const {
+  if (!world_) return std::nullopt;
   std::optional<Clearance> closest;
   for (const CapsuleObstaclePair& pair : world_->pairs()) {
     // A moving obstacle (breathing) meets the capsule moved back by its displacement, as in rt's contact.
@@ -127,8 +131,8 @@ std::optional<Clearance> ViewModel::clearance(const Vector7& q, double t) {
 
 json ViewModel::frame(const JointLog& log, std::size_t row) {
   const double t = log.t[row];
-  const std::optional<Clearance> closest = clearance(log.q[row], t);   // also the kinematics at q
   forward_kinematics(model_, data_, log.q[row]);
+  const std::optional<Clearance> closest = closest_obstacle(t);
   json links = json::array();
   for (const Transform& pose : data_.O_T_joint) links.push_back(pose_json(pose));
   json frame = {{"t", t}, {"q", vector_json(log.q[row])}, {"links", links}, {"flange", pose_json(data_.O_T_F)},

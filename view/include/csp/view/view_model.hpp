@@ -57,6 +57,9 @@ class ViewModel {
   const Model& model() const { return model_; }
 
  private:
+  // The closest obstacle with data_ at the frame's configuration (forward kinematics done).
+  std::optional<Clearance> closest_obstacle(double t) const;
+
   ViewRobot robot_;
   Model model_;
   Data data_;
