@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 
@@ -22,6 +23,7 @@ struct CampaignArguments {
   bool progress = false;
   bool slurm = false;
   campaign::SlurmOptions slurm_options;
+  bool retries_given = false;
   int task = 0, tasks = 1;
 };
 
@@ -46,26 +48,53 @@ int print_status(const campaign::CampaignDir& dir) {
   std::printf("csp campaign: %s: %d of %d cases done, %d failed (see below), %d to run\n", dir.dir.c_str(), status.done,
               status.total, status.failed, status.total - status.done - status.failed);
   for (const std::string& failure : status.failures) std::printf("  failed %s\n", failure.c_str());
-  if (std::filesystem::exists(dir.dir + "/slurm/job_id"))
-    std::printf("  Slurm job array: see %s/slurm/job_id, task logs %s/slurm/task_*.out\n", dir.dir.c_str(), dir.dir.c_str());
+  std::ifstream submissions(dir.dir + "/slurm/submissions.log");
+  std::string line, last;
+  int count = 0;
+  for (; std::getline(submissions, line); ++count) last = line;
+  if (count)
+    std::printf("  Slurm: %d submission%s, the last: %s (task logs %s/slurm/task_*.out, finish_*.out)\n", count,
+                count == 1 ? "" : "s", last.c_str(), dir.dir.c_str());
   return status.done == status.total ? 0 : 1;
+}
+
+// The Slurm job after the array (campaign/slurm.hpp): cases a dead task left undone are submitted
+// again while retries are left; else the table and report from what is done.
+int finish_slurm_campaign(const CampaignArguments& args) {
+  const campaign::CampaignDir dir = campaign::open_campaign(args.dir);
+  const campaign::Status status = campaign::campaign_status(dir);
+  const int undone = status.total - status.done;
+  if (undone > 0 && args.slurm_options.retries > 0) {
+    campaign::SlurmOptions options = args.slurm_options;
+    options.retries -= 1;
+    options.csp = this_executable();
+    const campaign::Submission submission = campaign::submit_slurm(dir, options);
+    std::printf("csp campaign finish: %s: %d of %d cases not done after the job array: submitted them again (array %s, %d tasks; "
+                "%d retries left)\n",
+                dir.dir.c_str(), undone, status.total, submission.array_job.c_str(), submission.tasks, options.retries);
+    return 0;
+  }
+  std::printf("csp campaign finish: %s: %d of %d cases done%s\n", dir.dir.c_str(), status.done, status.total,
+              undone ? ", no retries left (the same csp campaign --slurm again submits the rest)" : "");
+  return print_collected(dir);
 }
 
 int run_campaign(const CampaignArguments& args) {
   if (args.file.empty()) throw UsageError("expected a campaign file (csp campaign FILE --out DIR), or status, work, collect");
   if (args.out.empty()) throw UsageError("--out: expected the campaign's folder");
   const campaign::SlurmOptions& slurm = args.slurm_options;
-  if (!args.slurm && (!slurm.partition.empty() || !slurm.time.empty() || slurm.array_size > 0))
-    throw UsageError("--partition, --time and --array-size are options of --slurm");
+  if (!args.slurm && (!slurm.partition.empty() || !slurm.time.empty() || slurm.array_size > 0 || args.retries_given))
+    throw UsageError("--partition, --time, --array-size and --retries are options of --slurm");
   const campaign::CampaignDir dir = campaign::prepare_campaign(args.file, args.out);
   const campaign::Status before = campaign::campaign_status(dir);
   std::printf("csp campaign: %s: %zu cases, %d already done\n", args.file.c_str(), dir.cases.size(), before.done);
   if (args.slurm) {
     campaign::SlurmOptions options = args.slurm_options;
     options.csp = this_executable();
-    const std::string job = campaign::submit_slurm(dir, options);
-    std::printf("  submitted Slurm job array %s: `csp campaign status %s` for progress, then `csp campaign collect %s`\n",
-                job.c_str(), args.out.c_str(), args.out.c_str());
+    const campaign::Submission submission = campaign::submit_slurm(dir, options);
+    std::printf("  submitted Slurm job array %s (%d tasks) and job %s, which writes the table when the array ends (or submits\n"
+                "  what a dead task left undone again, at most %d times): `csp campaign status %s` for progress\n",
+                submission.array_job.c_str(), submission.tasks, submission.finish_job.c_str(), options.retries, args.out.c_str());
     return 0;
   }
   ProgressMeter progress("csp campaign", args.progress);
@@ -89,6 +118,14 @@ Command add_campaign_command(CLI::App& app) {
   cmd->add_option("--time", args->slurm_options.time, "--slurm: each task's time limit (sbatch --time, e.g. 00:30:00)");
   cmd->add_option("--array-size", args->slurm_options.array_size, "--slurm: the tasks (default: one per case, at most 100)")
       ->check(CLI::Range(1, 100000));
+  cmd->add_option_function<int>(
+         "--retries",
+         [args](int retries) {
+           args->slurm_options.retries = retries;
+           args->retries_given = true;
+         },
+         "--slurm: submissions again of the cases dead tasks left undone (default 2)")
+      ->check(CLI::Range(0, 100));
   add_progress_flag(*cmd, args->progress);
 
   CLI::App* status = cmd->add_subcommand("status", "How many of a campaign's cases are done, failed, left");
@@ -100,8 +137,15 @@ Command add_campaign_command(CLI::App& app) {
   work->add_option("--task", args->task, "This task's index")->required()->check(CLI::NonNegativeNumber);
   work->add_option("--tasks", args->tasks, "The number of tasks")->required()->check(CLI::PositiveNumber);
   work->add_option("--jobs", args->jobs, "Cases run at once (default 1)")->check(CLI::Range(1, 4096));
+  CLI::App* finish = cmd->add_subcommand("finish", "After a Slurm job array: the table, or what dead tasks left undone submitted again");
+  finish->add_option("dir", args->dir, "The campaign's folder")->required();
+  finish->add_option("--retries", args->slurm_options.retries, "Submissions again left")->required()->check(CLI::Range(0, 100));
+  finish->add_option("--array-size", args->slurm_options.array_size, "The tasks of a new array")->check(CLI::Range(1, 100000));
+  finish->add_option("--partition", args->slurm_options.partition, "The partition of a new array");
+  finish->add_option("--time", args->slurm_options.time, "Each task's time limit in a new array");
 
-  return [args, status, collect, work] {
+  return [args, status, collect, work, finish] {
+    if (finish->parsed()) return finish_slurm_campaign(*args);
     if (status->parsed()) return print_status(campaign::open_campaign(args->dir));
     if (collect->parsed()) return print_collected(campaign::open_campaign(args->dir));
     if (work->parsed()) {

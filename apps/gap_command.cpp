@@ -8,6 +8,8 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
+#include <vector>
 
 #include "cli_options.hpp"
 #include "commands.hpp"
@@ -34,11 +36,12 @@ struct GapArguments {
 
 // The simulator model. For the log of a CSP session (an LCM log with the robot's scenario record)
 // the robot file and end effector are the ones the robot ran with, unless given on the command line.
-Model build_model(const GapArguments& args) {
+// What was used goes to `notes` (lines said once the diagnosis is made: an error stays one line).
+Model build_model(const GapArguments& args, std::vector<std::string>& notes) {
   const run::SessionRobot robot = run::session_robot(
       args.log, args.channel, {args.model.robot, args.model.end_effector, args.robot_given, args.ee_given});
-  if (!robot.used.empty()) std::cerr << "csp gap: " << args.log << ": " << robot.used << "\n";
-  for (const std::string& note : robot.notes) std::cerr << "csp gap: " << args.log << ": " << note << "\n";
+  if (!robot.used.empty()) notes.push_back("csp gap: " + args.log + ": " + robot.used);
+  for (const std::string& note : robot.notes) notes.push_back("csp gap: " + args.log + ": " + note);
   ModelArguments model = args.model;
   model.robot = robot.robot_file;
   model.end_effector = robot.end_effector;
@@ -52,17 +55,20 @@ Model build_model(const GapArguments& args) {
 }
 
 // A CSV joint log, or the robot states of an LCM log: told apart by content, not by name. Its idle
-// stretches are left out (and said so) unless --keep-idle.
-JointLog read_log(const std::string& path, const GapArguments& args, const gap::FilterOptions& filter) {
+// stretches are left out (and said so in `notes`) unless --keep-idle.
+JointLog read_log(const std::string& path, const GapArguments& args, const gap::FilterOptions& filter,
+                  std::vector<std::string>& notes) {
   const JointLog log = run::read_joint_log(path, args.channel);
   if (args.keep_idle) return log;
   gap::IdleTrim trim = gap::leave_out_idle(log, filter);
   if (trim.stretches > 0) {
     const gap::IdleOptions idle;
-    std::cerr << "csp gap: " << path << ": left out " << std::fixed << std::setprecision(2) << trim.seconds_left_out
-              << std::defaultfloat << " s of idle in "
-              << trim.stretches << (trim.stretches == 1 ? " stretch" : " stretches") << " (every joint slower than "
-              << idle.velocity << " rad/s for " << idle.min_duration << " s or more; --keep-idle keeps them)\n";
+    std::ostringstream note;
+    note << "csp gap: " << path << ": left out " << std::fixed << std::setprecision(2) << trim.seconds_left_out
+         << std::defaultfloat << " s of idle in " << trim.stretches << (trim.stretches == 1 ? " stretch" : " stretches")
+         << " (every joint slower than " << idle.velocity << " rad/s for " << idle.min_duration
+         << " s or more; --keep-idle keeps them)";
+    notes.push_back(note.str());
   }
   return std::move(trim.log);
 }
@@ -81,21 +87,23 @@ int run_gap(const GapArguments& args, const std::string& command_line) {
       .input("--log-heldout", args.heldout)
       .input("--robot", args.robot_given ? args.model.robot : "")
       .check();
-  const Model model = build_model(args);
+  std::vector<std::string> notes;
+  const Model model = build_model(args, notes);
   gap::DiagnosisOptions options;
   options.train_fraction = args.train_fraction;
   options.filter.sample_period = args.sample_period;
   options.seed = args.seed;
-  const JointLog log = read_log(args.log, args, options.filter);
+  const JointLog log = read_log(args.log, args, options.filter, notes);
   ProgressMeter progress("csp gap", args.progress);
   options.progress = progress.callback();
   const auto start = std::chrono::steady_clock::now();
   const gap::Diagnosis diagnosis = args.heldout.empty()
                                        ? gap::diagnose(model, log, options)
-                                       : gap::diagnose(model, log, read_log(args.heldout, args, options.filter), options);
+                                       : gap::diagnose(model, log, read_log(args.heldout, args, options.filter, notes), options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::string causes;
   for (const std::string& cause : diagnosis.causes) causes += (causes.empty() ? "" : ", ") + cause;
+  for (const std::string& note : notes) std::cerr << note << "\n";
   progress.finish("verdict: " + (causes.empty() ? std::string("no library effect") : causes) +
                   format("; %.1f %% of the held-out gap unexplained", 100.0 * diagnosis.unexplained_fraction));
   const double idle_share = gap::idle_fraction(diagnosis.heldout.samples);

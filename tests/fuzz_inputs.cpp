@@ -575,6 +575,9 @@ Class cli() {
       {"emulate", "--duration", "0.02", "--log", "@DIR@/e.csv", "--lcm-log", "@DIR@/e.lcmlog"},
       {"replay", "@LOG@", "--csv", "@DIR@/r.csv"},
       {"workspace", "--samples", "2000", "--grid", "20", "--out", "@DIR@", "--points", "@DIR@/p.csv"},
+      {"campaign", CSP_SOURCE_DIR "/tests/campaign/tiny.yaml", "--out", "@DIR@/campaign", "--jobs", "1"},
+      {"campaign", "status", "@DIR@/campaign"},
+      {"campaign", "collect", "@DIR@/campaign"},
   };
   const std::vector<std::string> values = {"", "-1", "0", "1e308", "nan", "inf", "-inf", "1e-320", "x", "--q", "0,0",
                                            "1,2,3,4,5,6,7,8", "/dev/null", "/", "--help", "9223372036854775808", "1e18",

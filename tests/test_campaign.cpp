@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -20,10 +21,13 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "csp/campaign/pool.hpp"
 #include "csp/campaign/runner.hpp"
 #include "csp/io/robot_config.hpp"
+#include "csp/run/observers.hpp"
+#include "csp/run/sources.hpp"
 
 namespace {
 
@@ -78,11 +82,15 @@ std::map<std::string, std::vector<std::string>> table_rows(const std::string& di
   return rows;
 }
 
-// results.csv without its last column (the wall time of each run, the one number not deterministic).
+// results.csv without its last three columns (the controller's time and the wall time of each run,
+// the numbers that are not deterministic).
 std::string deterministic_table(const std::string& dir) {
   std::istringstream in(read_file(dir + "/results.csv"));
   std::string out;
-  for (std::string line; std::getline(in, line);) out += line.substr(0, line.rfind(',')) + "\n";
+  for (std::string line; std::getline(in, line);) {
+    for (int column = 0; column < 3; ++column) line.erase(line.rfind(','));
+    out += line + "\n";
+  }
   return out;
 }
 
@@ -256,14 +264,16 @@ TEST(Campaign, AScenarioAxisRunsEachBaseScenario) {
   std::vector<std::string> header;
   const auto rows = table_rows(dir + "/out", header);
   EXPECT_EQ(header, (std::vector<std::string>{"id", "case_seed", "scenario", "plant.load_mass", "reflex", "failed",
-                                              "tracking_error_max", "lost_commands", "reflex_errors", "failure", "wall_time_s"}));
+                                              "tracking_error_max", "lost_commands", "reflex_errors", "failure",
+                                              "controller_time_p99_us", "controller_time_max_us", "wall_time_s"}));
   for (const Case& c : prepared.cases) EXPECT_EQ(rows.at(c.id)[2], names[c.index]) << c.id;
   fs::remove_all(dir);
 }
 
 TEST(Campaign, TheShippedCampaignsLoad) {
   // The excitation campaign reads designs made first (its comment): not here.
-  const std::pair<const char*, std::size_t> shipped[] = {{"joint_impedance_real_gap.yaml", 64}, {"ultrasound_tissue.yaml", 20}};
+  const std::pair<const char*, std::size_t> shipped[] = {{"joint_impedance_real_gap.yaml", 64}, {"ultrasound_tissue.yaml", 20},
+                                                                {"gap_tool_check.yaml", 8}};
   for (const auto& [name, cases] : shipped) {
     const csp::campaign::Campaign campaign = csp::campaign::load_campaign(std::string(CSP_SOURCE_DIR "/configs/campaigns/") + name);
     const std::vector<Case> expanded = csp::campaign::expand_cases(campaign);
@@ -302,6 +312,10 @@ TEST(Campaign, ABadCampaignFileIsOneErrorNamingItsKey) {
             dir + "/bad.yaml: axes[0].parameter: expected `faults.loss_probability` to be a probability from 0 to 1");
   EXPECT_EQ(error_of(base + "axes:\n  - {parameter: scene.material.skin.stiffness, values: [1000]}\n"),
             dir + "/bad.yaml: axes[0].parameter: expected a scenario with a scene for `scene.material.skin.stiffness`");
+  EXPECT_EQ(error_of(base + "axes: []\ngap_verdict: yes please\n"), dir + "/bad.yaml: gap_verdict: expected true or false");
+  // csp gap's metrics are the campaign's only when it asks for the verdict.
+  EXPECT_EQ(error_of(base + "axes: []\nfail_if: {gap_unexplained_fraction: 0.5}\n")
+                .rfind(dir + "/bad.yaml: fail_if.gap_unexplained_fraction: expected a metric of this scenario (", 0), 0u);
   EXPECT_EQ(error_of(base + "axes: []\nfail_if: {force_error: 1}\n").rfind(dir + "/bad.yaml: fail_if.force_error: expected a metric of this scenario (tracking_error_rms, ", 0), 0u);
   EXPECT_EQ(error_of(base + "axes:\n  - {parameter: scenario, values: [default]}\n"),
             dir + "/bad.yaml: base: expected no base with a `scenario` axis (its values are the base scenarios)");
@@ -312,5 +326,79 @@ TEST(Campaign, ABadCampaignFileIsOneErrorNamingItsKey) {
   // The command says it in one line and exits with 2.
   EXPECT_EQ(run_csp("campaign " + dir + "/bad.yaml --out " + dir + "/out 2> /dev/null"), 2);
   EXPECT_FALSE(fs::exists(dir + "/out/cases.json"));
+  fs::remove_all(dir);
+}
+
+// gap_verdict: each run's log diagnosed as `csp gap --log` diagnoses the LCM log of the same run (an
+// independent path: the log written and read back, the model built from the recording by the csp
+// program): the same causes and the same numbers. The plant's unmodelled payload is named in the run
+// that has it, in none other (the default scenario's plant is its robot file's model otherwise).
+TEST(Campaign, EachRunsGapVerdictIsCspGapsOnTheRunsLog) {
+  const std::string dir = scratch_dir("gap");
+  const std::string file = write_file(dir + "/campaign.yaml",
+                                      "base: default\ngap_verdict: true\naxes:\n"
+                                      "  - {parameter: plant.load_mass, values: [0, 0.3]}\n"
+                                      "fail_if: {gap_unexplained_fraction: 0.5}\n");
+  ASSERT_EQ(run_csp("campaign " + file + " --out " + dir + "/out --jobs 2"), 0);
+  const csp::campaign::CampaignDir prepared = csp::campaign::open_campaign(dir + "/out");
+  std::vector<std::string> header;
+  const auto rows = table_rows(dir + "/out", header);
+  ASSERT_EQ(rows.size(), 2u);
+  auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << name;
+    return static_cast<std::size_t>(it - header.begin());
+  };
+  const std::size_t verdict = column("gap_verdict"), unexplained = column("gap_unexplained_fraction"),
+                    heldout_rms = column("gap_heldout_rms"), failed = column("failed"), p99 = column("controller_time_p99_us"),
+                    max = column("controller_time_max_us");
+  for (const Case& c : prepared.cases) {
+    const std::vector<std::string>& row = rows.at(c.id);
+    ASSERT_GT(row.size(), max) << c.id;
+    // The same run as an LCM log, diagnosed by the csp program.
+    const std::string log = dir + "/" + c.id + ".lcmlog", json = dir + "/" + c.id + ".json";
+    {
+      csp::run::Run run(csp::campaign::case_scenario(prepared.campaign, c));
+      csp::run::ControllerSource controller(run);
+      csp::run::LcmLogObserver recorder(log, run, controller.controller().mode);
+      run.observe(recorder);
+      run.run(controller);
+      recorder.flush();
+    }
+    ASSERT_EQ(run_csp("gap --log " + log + " --json " + json + " 2> /dev/null"), 0) << c.id;
+    const nlohmann::json diagnosis = nlohmann::json::parse(read_file(json));
+    std::string causes;
+    for (const auto& cause : diagnosis["verdict"]["causes"]) causes += (causes.empty() ? "" : "; ") + cause.get<std::string>();
+    EXPECT_EQ(row[verdict], causes.empty() ? "none" : causes) << c.id;
+    EXPECT_NEAR(std::strtod(row[unexplained].c_str(), nullptr), diagnosis["verdict"]["unexplained_fraction"].get<double>(), 1e-6) << c.id;
+    double mean_square = 0.0;
+    for (const auto& rms : diagnosis["baseline"]["heldout_rms"]) mean_square += rms.get<double>() * rms.get<double>() / 7.0;
+    EXPECT_NEAR(std::strtod(row[heldout_rms].c_str(), nullptr), std::sqrt(mean_square), 1e-6) << c.id;
+    const bool loaded = std::strtod(row[2].c_str(), nullptr) > 0.0;
+    EXPECT_EQ(row[verdict].find("payload") != std::string::npos, loaded) << c.id << ": " << row[verdict];
+    // The limit on what is left unexplained: the payload's run is explained, the other is not.
+    EXPECT_EQ(row[failed], loaded ? "0" : "1") << c.id;
+    const double controller_p99 = std::strtod(row[p99].c_str(), nullptr);
+    EXPECT_GT(controller_p99, 0.0) << c.id;
+    EXPECT_LE(controller_p99, std::strtod(row[max].c_str(), nullptr)) << c.id;
+  }
+  const std::string summary = read_file(dir + "/out/report/summary.md");
+  EXPECT_NE(summary.find("the causes csp gap's verdicts name (docs/gap.md), in how many runs: none 1, payload 1"), std::string::npos)
+      << summary;
+  fs::remove_all(dir);
+}
+
+// A run too short for csp gap's filters (a reflex at once) keeps its other metrics; its verdict says why.
+TEST(Campaign, ARunTooShortForTheGapToolSaysWhy) {
+  const std::string dir = scratch_dir("gap_short");
+  const std::string file = write_file(dir + "/campaign.yaml", "base: default\nduration: 0.1\ngap_verdict: true\naxes: []\n");
+  const csp::campaign::CampaignDir prepared = csp::campaign::prepare_campaign(file, dir + "/out");
+  const csp::campaign::Outcome outcome = csp::campaign::run_case(prepared.campaign, prepared.cases.at(0));
+  EXPECT_EQ(outcome.gap_verdict.rfind("not diagnosed: case c0000's run: too short", 0), 0u) << outcome.gap_verdict;
+  ASSERT_GE(outcome.metrics.size(), 2u);
+  EXPECT_EQ(outcome.metrics.end()[-2].first, "gap_heldout_rms");
+  EXPECT_TRUE(std::isnan(outcome.metrics.back().second));
+  EXPECT_EQ(outcome.metrics.front().first, "tracking_error_rms");
+  EXPECT_FALSE(std::isnan(outcome.metrics.front().second));
   fs::remove_all(dir);
 }

@@ -118,7 +118,7 @@ Axis read_scenario_axis(const Field& field, Campaign& campaign) {
 Campaign load_campaign(const std::string& path) {
   const YAML::Node root = load_yaml_file(path, "campaign file");
   const Field file(root, path, "");
-  file.allow_only({"name", "description", "base", "duration", "seed", "runs", "axes", "fail_if", "worst_by", "metrics"});
+  file.allow_only({"name", "description", "base", "duration", "seed", "runs", "axes", "fail_if", "worst_by", "metrics", "gap_verdict"});
   Campaign campaign;
   campaign.path = path;
   const Field axes = file["axes"];
@@ -133,6 +133,7 @@ Campaign load_campaign(const std::string& path) {
     if (*campaign.duration > rt::kMaxDuration) file["duration"].fail("at most a year of seconds");
   }
   if (file.has("seed")) campaign.seed = static_cast<uint64_t>(file["seed"].whole_number(0, int64_t{1} << 53));
+  if (file.has("gap_verdict")) campaign.gap_verdict = file["gap_verdict"].boolean();
   if (file.has("runs")) campaign.runs = static_cast<int>(file["runs"].whole_number(1, 1'000'000));
 
   // Every parameter is applied once to each base scenario: an unknown name is this file's error.
@@ -158,9 +159,9 @@ Campaign load_campaign(const std::string& path) {
   }
 
   // One table: every base scenario's runs measure the same (all with the same kind of scene task, or none).
-  const std::vector<std::string> metrics = metric_names(bases.front());
+  const std::vector<std::string> metrics = metric_names(bases.front(), campaign.gap_verdict);
   for (std::size_t i = 1; i < bases.size(); ++i)
-    if (metric_names(bases[i]) != metrics)
+    if (metric_names(bases[i], campaign.gap_verdict) != metrics)
       axes[scenario_axes[0]]["values"][i].fail("a scenario whose runs have the metrics of the first (the same kind of task, or none)");
   auto check_metric = [&](const Field& field, const std::string& name) {
     if (std::find(metrics.begin(), metrics.end(), name) != metrics.end()) return;

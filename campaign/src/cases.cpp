@@ -220,6 +220,7 @@ std::string cases_json(const Campaign& campaign, const std::vector<Case>& cases)
   j["fail_if"] = campaign.limits;
   j["worst_by"] = campaign.worst_by;
   j["metrics"] = campaign.kept;
+  j["gap_verdict"] = campaign.gap_verdict;
   j["cases"] = nlohmann::ordered_json::array();
   for (const Case& c : cases) {
     nlohmann::ordered_json parameters = nlohmann::ordered_json::object();
@@ -249,6 +250,7 @@ void read_cases_json(const std::string& path, Campaign& campaign, std::vector<Ca
     campaign.limits = j.at("fail_if").get<std::map<std::string, double>>();
     campaign.worst_by = j.at("worst_by").get<std::string>();
     campaign.kept = j.at("metrics").get<std::vector<std::string>>();
+    campaign.gap_verdict = j.at("gap_verdict").get<bool>();
     cases.clear();
     for (const auto& item : j.at("cases")) {
       Case c;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 
 #include "csp/io/svg_plot.hpp"
@@ -24,8 +25,32 @@ double metric_of(const Outcome& outcome, const std::string& name) {
 struct Bin {
   double low = 0.0, high = 0.0;
   int runs = 0, failed = 0;
+  std::map<std::string, int> gap_causes;   // how many of its runs csp gap's verdict named each cause in, when asked
   double centre() const { return 0.5 * (low + high); }
 };
+
+// Counts each cause a run's verdict names ("payload; joint_friction": one each), or `none`, or `not
+// diagnosed` whatever the reason (results.csv has it): which cause comes with which value of an axis.
+void count_causes(const std::string& verdict, std::map<std::string, int>& counts) {
+  if (verdict.empty()) return;
+  if (verdict.rfind("not diagnosed", 0) == 0) {
+    ++counts["not diagnosed"];
+    return;
+  }
+  for (std::size_t start = 0, end; start <= verdict.size(); start = end + 2) {
+    end = std::min(verdict.find("; ", start), verdict.size());
+    ++counts[verdict.substr(start, end - start)];
+  }
+}
+
+// "payload 4, none 2": the causes, most often named first.
+std::string cause_counts(const std::map<std::string, int>& counts) {
+  std::vector<std::pair<std::string, int>> sorted(counts.begin(), counts.end());
+  std::stable_sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::string out;
+  for (const auto& [cause, runs] : sorted) out += format("%s%s %d", out.empty() ? "" : ", ", cause.c_str(), runs);
+  return out;
+}
 
 // The axis's distinct values (a grid), or kBins equal-width bins over its range (a draw).
 std::vector<Bin> bins_of(const std::vector<Row>& rows, std::size_t axis) {
@@ -33,16 +58,17 @@ std::vector<Bin> bins_of(const std::vector<Row>& rows, std::size_t axis) {
   for (const Row& row : rows) distinct.insert(row.c->parameters[axis].second);
   std::vector<Bin> bins;
   if (distinct.size() <= kMostDistinctValues) {
-    for (const double v : distinct) bins.push_back({v, v, 0, 0});
+    for (const double v : distinct) bins.push_back({v, v, 0, 0, {}});
   } else {
     const double low = *distinct.begin(), width = (*distinct.rbegin() - low) / kBins;
-    for (int i = 0; i < kBins; ++i) bins.push_back({low + i * width, low + (i + 1) * width, 0, 0});
+    for (int i = 0; i < kBins; ++i) bins.push_back({low + i * width, low + (i + 1) * width, 0, 0, {}});
   }
   for (const Row& row : rows) {
     const double v = row.c->parameters[axis].second;
     auto bin = std::find_if(bins.begin(), bins.end(), [&](const Bin& b) { return v >= b.low && v <= b.high; });
     ++bin->runs;
     bin->failed += row.outcome.failed ? 1 : 0;
+    count_causes(row.outcome.gap_verdict, bin->gap_causes);
   }
   return bins;
 }
@@ -109,19 +135,33 @@ void write_report(const CampaignDir& campaign, const std::vector<Row>& rows, int
   md += format("- cases: %zu; run: %zu; missing: %d\n", campaign.cases.size(), rows.size(), missing);
   md += format("- failed: %d of %zu (%.1f %%): a reflex", failed, rows.size(), rows.empty() ? 0.0 : 100.0 * failed / rows.size());
   for (const auto& [metric, limit] : file.limits) md += format(", or %s > %g", metric.c_str(), limit);
-  md += "\n\n## Failure rate against each axis\n";
+  md += "\n";
+  // The controller's compute time per cycle: the machine's, not the case's (it differs run to run).
+  const Row* slowest = nullptr;
+  for (const Row& row : rows)
+    if (!slowest || row.outcome.controller_time_max_us > slowest->outcome.controller_time_max_us) slowest = &row;
+  if (slowest)
+    md += format("- the controller's compute time per cycle (this machine's, not deterministic): at most %.1f us (%s, p99 %.1f us)\n",
+                 slowest->outcome.controller_time_max_us, slowest->c->id.c_str(), slowest->outcome.controller_time_p99_us);
+  std::map<std::string, int> causes;
+  for (const Row& row : rows) count_causes(row.outcome.gap_verdict, causes);
+  if (!causes.empty()) md += "- the causes csp gap's verdicts name (docs/gap.md), in how many runs: " + cause_counts(causes) + "\n";
+  md += "\n## Failure rate against each axis\n";
   for (std::size_t axis = 0; axis < file.axes.size() && !rows.empty(); ++axis) {
     const std::vector<Bin> bins = bins_of(rows, axis);
     const std::string figure = "failure_rate_" + file_name(file.axes[axis].parameter) + ".svg";
     write_text_file(dir + "/" + figure, axis_figure(campaign, rows, axis, bins));
-    md += format("\n### `%s`\n\n![](%s)\n\n| value | runs | failed | rate |\n|---|---|---|---|\n",
-                 file.axes[axis].parameter.c_str(), figure.c_str());
+    md += format("\n### `%s`\n\n![](%s)\n\n| value | runs | failed | rate |%s\n|---|---|---|---|%s\n",
+                 file.axes[axis].parameter.c_str(), figure.c_str(), file.gap_verdict ? " csp gap's causes (runs) |" : "",
+                 file.gap_verdict ? "---|" : "");
     for (const Bin& bin : bins) {
       const std::string value = file.axes[axis].parameter == "scenario" ? scenario_name(file, bin.low)
                                 : bin.low == bin.high                   ? format("%g", bin.low)
                                                                         : format("%.4g to %.4g", bin.low, bin.high);
-      md += format("| %s | %d | %d | %s |\n", value.c_str(), bin.runs, bin.failed,
+      md += format("| %s | %d | %d | %s |", value.c_str(), bin.runs, bin.failed,
                    bin.runs ? format("%.0f %%", 100.0 * bin.failed / bin.runs).c_str() : "-");
+      if (file.gap_verdict) md += format(" %s |", cause_counts(bin.gap_causes).c_str());
+      md += "\n";
     }
   }
   if (file.axes.size() >= 2 && !rows.empty()) {

@@ -9,6 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "csp/gap/diagnosis.hpp"
+#include "csp/gap/idle.hpp"
+#include "csp/io/robot_config.hpp"
 #include "csp/run/observers.hpp"
 #include "csp/run/sources.hpp"
 
@@ -49,9 +52,36 @@ void add_counters(Measured& out, const rt::EmulatorCounters& counters) {
   out.add("motion_cycles", static_cast<double>(counters.motion_cycles));
 }
 
+// csp gap on the run's log as `csp gap --log` diagnoses a session's LCM log (docs/gap.md): against
+// the model of the scenario's robot file and end effector with the file's default inertial and
+// friction sets (CSP's model of the arm, not the robot's own libfranka-like model), its idle
+// stretches left out. NaN and why when it cannot be diagnosed (a run cut short by a reflex is too short).
+std::string add_gap_verdict(Measured& out, const rt::Scenario& scenario, const JointLog* log) {
+  double heldout_rms = NAN, unexplained = NAN;
+  std::string verdict;
+  if (log) {
+    try {
+      const gap::DiagnosisOptions options;
+      ModelOptions model;
+      model.end_effector = scenario.end_effector;
+      const gap::Diagnosis d = gap::diagnose(Model(model_parameters(load_robot_config(scenario.robot_file), model)),
+                                             gap::leave_out_idle(*log, options.filter).log, options);
+      heldout_rms = std::sqrt(d.baseline_heldout_rms.squaredNorm() / kNumJoints);   // csp gap's "N m RMS per joint"
+      unexplained = d.unexplained_fraction;
+      for (const std::string& cause : d.causes) verdict += (verdict.empty() ? "" : "; ") + cause;
+      if (verdict.empty()) verdict = "none";
+    } catch (const std::exception& e) {
+      verdict = std::string("not diagnosed: ") + e.what();
+    }
+  }
+  out.add("gap_heldout_rms", heldout_rms);                 // [N m] before any effect is added
+  out.add("gap_unexplained_fraction", unexplained);        // of its mean square, once the verdict's causes are
+  return verdict;
+}
+
 }  // namespace
 
-std::vector<std::string> metric_names(const rt::Scenario& scenario) {
+std::vector<std::string> metric_names(const rt::Scenario& scenario, bool gap_verdict) {
   const run::Run run(scenario);
   Measured measured;
   if (scenario.emulator.scene) {
@@ -62,6 +92,7 @@ std::vector<std::string> metric_names(const rt::Scenario& scenario) {
     add_task_metrics(measured, &tracking, nullptr);
   }
   add_counters(measured, run.emulator().counters());
+  if (gap_verdict) add_gap_verdict(measured, scenario, nullptr);
   std::vector<std::string> names;
   for (const auto& metric : measured.metrics) names.push_back(metric.first);
   return names;
@@ -82,6 +113,11 @@ Outcome run_case(const Campaign& campaign, const Case& c) {
     tracking = std::make_unique<run::TrackingObserver>(run::scenario_reference(scenario, run.emulator()), run.emulator());
     run.observe(*tracking);
   }
+  std::unique_ptr<run::JointLogRecorder> log;
+  if (campaign.gap_verdict) {
+    log = std::make_unique<run::JointLogRecorder>(run.emulator());
+    run.observe(*log);
+  }
   run.run(controller);
 
   Outcome outcome;
@@ -91,6 +127,10 @@ Outcome run_case(const Campaign& campaign, const Case& c) {
   Measured measured;
   add_task_metrics(measured, tracking.get(), medical.get());
   add_counters(measured, run.emulator().counters());
+  if (log) {
+    log->log().source = "case " + c.id + "'s run";   // what a diagnosis error names
+    outcome.gap_verdict = add_gap_verdict(measured, scenario, &log->log());
+  }
   outcome.metrics = std::move(measured.metrics);
 
   if (outcome.reflex) outcome.failure = "reflex: " + outcome.reflex_errors;
@@ -102,6 +142,9 @@ Outcome run_case(const Campaign& campaign, const Case& c) {
     outcome.failure += (outcome.failure.empty() ? "" : "; ") + why.str();
   }
   outcome.failed = !outcome.failure.empty();
+  const rt::Percentiles& controller_time = controller.motion().timing.round_trip_us;
+  outcome.controller_time_p99_us = controller_time.p99;
+  outcome.controller_time_max_us = controller_time.max;
   outcome.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return outcome;
 }
@@ -117,6 +160,9 @@ std::string outcome_json(const Outcome& outcome) {
   // A metric that did not happen (NaN: no breakthrough) is null.
   for (const auto& [name, value] : outcome.metrics) metrics[name] = std::isnan(value) ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(value);
   j["metrics"] = metrics;
+  if (!outcome.gap_verdict.empty()) j["gap_verdict"] = outcome.gap_verdict;
+  j["controller_time_p99_us"] = outcome.controller_time_p99_us;
+  j["controller_time_max_us"] = outcome.controller_time_max_us;
   j["wall_time_s"] = outcome.wall_time_s;
   return j.dump(1) + "\n";
 }
@@ -134,6 +180,9 @@ Outcome read_outcome_json(const std::string& path) {
     outcome.failure = j.at("failure").get<std::string>();
     for (const auto& [name, value] : j.at("metrics").items())
       outcome.metrics.emplace_back(name, value.is_null() ? NAN : value.get<double>());
+    outcome.gap_verdict = j.value("gap_verdict", std::string());
+    outcome.controller_time_p99_us = j.at("controller_time_p99_us").get<double>();
+    outcome.controller_time_max_us = j.at("controller_time_max_us").get<double>();
     outcome.wall_time_s = j.at("wall_time_s").get<double>();
     return outcome;
   } catch (const nlohmann::json::exception& e) {

@@ -64,7 +64,11 @@ Collected collect_results(const CampaignDir& campaign) {
       header.push_back(metrics[i].first);
     }
   }
-  header.insert(header.end(), {"reflex_errors", "failure", "wall_time_s"});
+  header.insert(header.end(), {"reflex_errors", "failure"});
+  const bool gap = campaign.campaign.gap_verdict;
+  if (gap) header.push_back("gap_verdict");
+  // Last: the timing, the columns that are not deterministic.
+  header.insert(header.end(), {"controller_time_p99_us", "controller_time_max_us", "wall_time_s"});
   std::string csv = csv_line(header);
   for (const Row& row : rows) {
     const Outcome& o = row.outcome;
@@ -75,7 +79,10 @@ Collected collect_results(const CampaignDir& campaign) {
       fields.push_back(name == "scenario" ? csv_field(scenario_name(campaign.campaign, value)) : csv_number(value));
     fields.insert(fields.end(), {o.reflex ? "1" : "0", o.failed ? "1" : "0"});
     for (const std::size_t i : columns) fields.push_back(csv_number(o.metrics[i].second));
-    fields.insert(fields.end(), {csv_field(o.reflex_errors), csv_field(o.failure), format("%.6f", o.wall_time_s)});
+    fields.insert(fields.end(), {csv_field(o.reflex_errors), csv_field(o.failure)});
+    if (gap) fields.push_back(csv_field(o.gap_verdict));
+    fields.insert(fields.end(), {format("%.1f", o.controller_time_p99_us), format("%.1f", o.controller_time_max_us),
+                                 format("%.6f", o.wall_time_s)});
     csv += csv_line(fields);
   }
   write_text_file(campaign.dir + "/results.csv", csv);

@@ -487,6 +487,7 @@ Scenario load_scenario(const std::string& path) {
     top["robot"].fail("the path of a robot file, relative to this scenario (`" + s.robot_file + "` is not a readable file)");
   const RobotConfig config = load_robot_config(s.robot_file);
   const std::string end_effector = top.has("end_effector") ? top["end_effector"].text() : "none";
+  s.end_effector = end_effector;
   s.has_hand = end_effector == "hand";
   const std::string joint_limits = top.has("joint_limits") ? top["joint_limits"].text() : "";
 

@@ -2,29 +2,14 @@
 
 #include <filesystem>
 #include <stdexcept>
+#include <utility>
 
 #include "csp/io/robot_config.hpp"
-#include "csp/rt/csv_log.hpp"
+#include "csp/run/observers.hpp"
 #include "csp/run/session_log.hpp"
 #include "csp/run/sources.hpp"
 
 namespace csp::view {
-namespace {
-
-// Every state of a run, as joint-log rows (the page's recording is made from them).
-class RowRecorder : public run::Observer {
- public:
-  explicit RowRecorder(JointLog& log) : log_(log) {}
-  void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override {
-    rt::append_state(log_, state, cycle.command_received);
-  }
-
- private:
-  JointLog& log_;
-};
-
-}  // namespace
-
 ViewRobot view_robot(const rt::Scenario& scenario) {
   return {scenario.emulator.plant, load_robot_config(scenario.robot_file).name, scenario.emulator.scene,
           scenario.has_hand};
@@ -38,14 +23,12 @@ JointLog run_scenario(const rt::Scenario& given) {
   rt::Scenario scenario = given;
   scenario.clock = rt::Clock::kLockstep;   // shown afterwards: no reason to wait for the wall clock
   run::Run run(scenario);
-  JointLog log;
-  log.source = "scenario " + scenario.path;
-  rt::append_state(log, run.emulator().state(), false);   // the pose it starts from
-  RowRecorder recorder(log);
+  run::JointLogRecorder recorder(run.emulator());   // from the pose it starts from
   run.observe(recorder);
   run::ControllerSource controller(run);
   run.run(controller);
-  return log;
+  recorder.log().source = "scenario " + scenario.path;
+  return std::move(recorder.log());
 }
 
 LogInput read_log_input(const std::string& log_path, const std::string& state_channel, const std::string& scenario_path) {

@@ -89,6 +89,7 @@ struct Scenario {
   std::string path;
   std::string name;
   std::string robot_file;
+  std::string end_effector = "none";   // a key of the robot file's end_effectors (its `end_effector:`)
   EmulatorSettings emulator;
   ControllerSpec controller;
   ControllerFaults controller_faults;

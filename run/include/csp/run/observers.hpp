@@ -39,6 +39,20 @@ class CsvLogObserver : public Observer {
   rt::CsvLog log_;
 };
 
+// Every state of a run kept in memory as joint-log rows, from the state the run starts from (the
+// page of `csp view --scenario`, a campaign's per-run `csp gap` diagnosis).
+class JointLogRecorder : public Observer {
+ public:
+  explicit JointLogRecorder(const rt::Emulator& emulator) { rt::append_state(log_, emulator.state(), false); }
+  void on_cycle(const rt::RobotState& state, const rt::CycleInfo& cycle) override {
+    rt::append_state(log_, state, cycle.command_received);
+  }
+  JointLog& log() { return log_; }
+
+ private:
+  JointLog log_;
+};
+
 // The CSV log at `path` observing `run` from now on; none for an empty path (a command's option).
 std::unique_ptr<CsvLogObserver> observe_csv_log(Run& run, const std::string& path);
 
