@@ -1,9 +1,8 @@
 // RNEA and the inertial regressor over many states (batch.hpp): the Newton-Euler recursion of
-// rnea.cpp and regressor.cpp on four states at once, every scalar a lane of Eigen::Array4d (one
-// AVX2 register). The equations are theirs: outward Craig eqs. 6.45-6.47, each link's wrench about
-// its origin eqs. 6.48-6.50, inward eqs. 6.51-6.53; for the regressor each link's wrench as its
-// 6x10 regressor in the standard parameters (Atkeson, An and Hollerbach 1986), carried inward
-// column by column.
+// rnea.cpp and regressor.cpp on four states at once, every scalar a lane of one AVX2 register. The
+// equations are theirs: outward Craig eqs. 6.45-6.47, each link's wrench about its origin eqs.
+// 6.48-6.50, inward eqs. 6.51-6.53; for the regressor each link's wrench as its 6x10 regressor in
+// the standard parameters (Atkeson, An and Hollerbach 1986), carried inward column by column.
 #include "csp/dynamics/batch.hpp"
 
 #include <algorithm>
@@ -11,7 +10,6 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
-#include <vector>
 
 #include "batch_trig.hpp"
 
@@ -140,7 +138,7 @@ CSP_LANE LaneVector inertia_product_column(const LaneVector& a, int k) {
 // The net wrench of a link, linear in its standard parameters, column by column (regressor.cpp's
 // link_regressor):  f = m dv + ([dw]x + [w]x [w]x) h,  n = -[dv]x h + L(dw) I + [w]x L(w) I.
 // The six columns of I_O have no force, and a pure moment stays pure as it is carried inward
-// (n' = R n): they are kept as moments alone, a third of the work of a wrench.
+// (n' = R n): they are kept as moments alone, about a third of the work of moving a wrench.
 struct LaneRegressor {
   std::array<LaneWrench, 4> mass_and_first_moment;   // m, hx, hy, hz
   std::array<LaneVector, 6> inertia;                 // Ixx, Ixy, Ixz, Iyy, Iyz, Izz: moments
@@ -199,6 +197,8 @@ class LaneBlock {
   alignas(32) double sin_[kNumJoints * kLanes], cos_[kNumJoints * kLanes];
   alignas(32) double dq_[kNumJoints * kLanes] = {}, ddq_[kNumJoints * kLanes] = {};
 };
+
+#undef CSP_LANE   // (a unity build puts other files after this one)
 
 }  // namespace
 
