@@ -3,33 +3,42 @@
 #include <algorithm>
 #include <cmath>
 
-#include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/batch.hpp"
 
 namespace csp::gap {
 
-Part evaluate_part(const Model& model, const InertialRegressor& regressor, Samples samples) {
+// All samples at once (dynamics/batch.hpp), which gives the one-state algorithms' results to rounding;
+// the regressor is the model's, as `regressor` would give it.
+Part evaluate_part(const Model& model, const InertialRegressor& /*regressor*/, Samples samples) {
   Part part;
   const std::size_t n = samples.size();
-  const Eigen::Index rows = kNumJoints * static_cast<Eigen::Index>(n);
-  part.inertial.resize(rows, kInertialParameters);
-  part.tilt.resize(rows, 2);
+  StateBatch states(static_cast<Eigen::Index>(n));
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto column = static_cast<Eigen::Index>(k);
+    states.q.col(column) = samples.q[k];
+    states.dq.col(column) = samples.dq[k];
+    states.ddq.col(column) = samples.ddq[k];
+  }
+  StateBatch at_rest = states;   // g(q) is the torque at rest
+  at_rest.dq.setZero();
+  at_rest.ddq.setZero();
   // Gravity is linear in the gravity vector: a small tilt by angle a about base axis e turns g
   // into g + a e x g, adding the gravity torque of the vector e x g.
   const Model tilt_x = with_gravity(model, Vector3::UnitX().cross(model.gravity()));
   const Model tilt_y = with_gravity(model, Vector3::UnitY().cross(model.gravity()));
-  Data data;
+  JointMatrix tau, g, gx, gy;
+  rnea_batch(model, states, tau);
+  rnea_batch(model, at_rest, g);
+  rnea_batch(tilt_x, at_rest, gx);
+  rnea_batch(tilt_y, at_rest, gy);
+  inertial_regressor_batch(model, states, part.inertial);
+  part.tilt.resize(part.inertial.rows(), 2);
+  part.tilt.col(0) = gx.reshaped();   // column-major: row 7 k + j is joint j of sample k
+  part.tilt.col(1) = gy.reshaped();
   for (std::size_t k = 0; k < n; ++k) {
-    Vector7 tau, g, gx, gy;
-    rnea(model, data, samples.q[k], samples.dq[k], samples.ddq[k], tau);
-    part.predicted.push_back(tau + friction_torque(model.parameters().friction, samples.dq[k]));
-    gravity_torque(model, data, samples.q[k], g);
-    part.gravity.push_back(g);
-    gravity_torque(tilt_x, data, samples.q[k], gx);
-    gravity_torque(tilt_y, data, samples.q[k], gy);
-    const Eigen::Index row = kNumJoints * static_cast<Eigen::Index>(k);
-    part.tilt.block<kNumJoints, 1>(row, 0) = gx;
-    part.tilt.block<kNumJoints, 1>(row, 1) = gy;
-    part.inertial.middleRows<kNumJoints>(row) = regressor(data, samples.q[k], samples.dq[k], samples.ddq[k]);
+    const auto column = static_cast<Eigen::Index>(k);
+    part.predicted.push_back(tau.col(column) + friction_torque(model.parameters().friction, samples.dq[k]));
+    part.gravity.push_back(g.col(column));
   }
   part.residual = stack(samples.tau) - stack(part.predicted);
   part.samples = std::move(samples);

@@ -200,11 +200,11 @@ Eigen::MatrixXd free_matrix(const std::vector<double>& x, Eigen::Index m) {
 
 double ExcitationProblem::criterion(const std::vector<double>& x, std::vector<double>* gradient) const {
   const Eigen::MatrixXd free = free_matrix(x, design_q_.cols());
-  const int samples = static_cast<int>(design_q_.rows()), p = id_.parameters();
+  const int samples = static_cast<int>(design_q_.rows());
   const double periods = options_.periods;
-  Eigen::MatrixXd W(kNumJoints * samples, p);
-  Data data;
-  for (int k = 0; k < samples; ++k) W.middleRows(kNumJoints * k, kNumJoints) = id_.scale_rows(id_.rows(data, design_state(free, k)));
+  std::vector<JointSample> states;
+  for (int k = 0; k < samples; ++k) states.push_back(design_state(free, k));
+  const Eigen::MatrixXd W = id_.stacked_scaled(states);   // all states at once (dynamics/batch.hpp)
   const double lambda = options_.task.empty() ? 0.0 : options_.task_weight;
   Eigen::MatrixXd A = periods * W.transpose() * W;
   if (options_.prior_information.size() > 0) A += options_.prior_information;
@@ -222,8 +222,9 @@ double ExcitationProblem::criterion(const std::vector<double>& x, std::vector<do
     double lightest = INFINITY;
     for (int i = 0; i < kNumJoints; ++i) lightest = std::min(lightest, nominal[kLinkParameters * i]);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(x.size()));
+    Data data;
     for (int k = 0; k < samples; ++k) {
-      const JointSample s = design_state(free, k);
+      const JointSample& s = states[static_cast<std::size_t>(k)];
       const Eigen::MatrixXd H = id_.noise_sigma().cwiseInverse().asDiagonal() * G.middleRows(kNumJoints * k, kNumJoints) *
                                 id_.column_scale().asDiagonal();
       std::array<Model, kNumJoints> weighted{model_, model_, model_, model_, model_, model_, model_};

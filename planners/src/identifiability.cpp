@@ -8,6 +8,7 @@
 #include <Eigen/QR>
 
 #include "csp/dynamics/algorithms.hpp"
+#include "csp/dynamics/batch.hpp"
 
 namespace csp::planners {
 
@@ -69,17 +70,31 @@ std::vector<std::string> IdentificationModel::parameter_names() const {
   return names;
 }
 
+namespace {
+
+constexpr int kFrictionColumns = kFrictionParametersPerJoint * kNumJoints;
+using FrictionRows = Eigen::Matrix<double, kNumJoints, kFrictionColumns>;
+
+// One state's friction columns: [dq_j, tanh(dq_j / v), 1] on joint j's row, zero elsewhere.
+FrictionRows friction_rows(const Vector7& dq) {
+  FrictionRows F = FrictionRows::Zero();
+  for (int j = 0; j < kNumJoints; ++j) {
+    const int c = kFrictionParametersPerJoint * j;
+    F(j, c) = dq[j];
+    F(j, c + 1) = std::tanh(dq[j] / kCoulombVelocity);
+    F(j, c + 2) = 1.0;
+  }
+  return F;
+}
+
+}  // namespace
+
 Eigen::MatrixXd IdentificationModel::rows(Data& data, const JointSample& s, Vector7& model_torque) const {
   const InertialRegressorRows Y = regressor_(data, s.q, s.dq, s.ddq);
   model_torque = Y * standard_ + model_.armature().cwiseProduct(s.ddq) + friction_torque(model_.parameters().friction, s.dq);
-  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(kNumJoints, parameters());
+  Eigen::MatrixXd R(kNumJoints, parameters());
   R.leftCols(base_parameters()) = Y(Eigen::all, base_);
-  for (int j = 0; j < kNumJoints; ++j) {
-    const int c = base_parameters() + kFrictionParametersPerJoint * j;
-    R(j, c) = s.dq[j];
-    R(j, c + 1) = std::tanh(s.dq[j] / kCoulombVelocity);
-    R(j, c + 2) = 1.0;
-  }
+  R.rightCols<kFrictionColumns>() = friction_rows(s.dq);
   return R;
 }
 
@@ -92,10 +107,22 @@ Eigen::MatrixXd IdentificationModel::scale_rows(const Eigen::MatrixXd& rows) con
   return sigma_.cwiseInverse().asDiagonal() * rows * scale_.asDiagonal();
 }
 
+// The inertial regressors of all samples at once (dynamics/batch.hpp), then each sample's friction columns.
 Eigen::MatrixXd IdentificationModel::stacked(const std::vector<JointSample>& samples) const {
-  Eigen::MatrixXd W(kNumJoints * static_cast<Eigen::Index>(samples.size()), parameters());
-  Data data;
-  for (std::size_t k = 0; k < samples.size(); ++k) W.middleRows<kNumJoints>(kNumJoints * k) = rows(data, samples[k]);
+  StateBatch states(static_cast<Eigen::Index>(samples.size()));
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const auto column = static_cast<Eigen::Index>(k);
+    states.q.col(column) = samples[k].q;
+    states.dq.col(column) = samples[k].dq;
+    states.ddq.col(column) = samples[k].ddq;
+  }
+  Eigen::MatrixXd Y;
+  inertial_regressor_batch(model_, states, Y);
+  Eigen::MatrixXd W(Y.rows(), parameters());
+  W.leftCols(base_parameters()) = Y(Eigen::all, base_);
+  for (std::size_t k = 0; k < samples.size(); ++k)
+    W.block<kNumJoints, kFrictionColumns>(kNumJoints * static_cast<Eigen::Index>(k), base_parameters()) =
+        friction_rows(samples[k].dq);
   return W;
 }
 
