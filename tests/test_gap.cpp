@@ -326,8 +326,7 @@ TEST(GapUnexplained, NoiseAloneLeavesNothingAndTheFloorIsTheNoise) {
   const Model model = diagnosing_model();
   const LogOptions options;
   const JointLog log = plain_log(model, 10.0, 21);
-  const InertialRegressor regressor(model);
-  const Part part = evaluate_part(model, regressor, filter_log(log, FilterOptions{}));
+  const Part part = evaluate_part(model, filter_log(log, FilterOptions{}));
   const Localisation localised = localise_unexplained(part, part.residual, {});
   for (const UnexplainedStructure& u : localised.structures) ADD_FAILURE() << u.detail;
   // The filter's weights: its response to unit impulses on the 1 kHz grid.
@@ -366,8 +365,7 @@ TEST(GapUnexplained, NoiseAloneLeavesNothingAndTheFloorIsTheNoise) {
 // their bands overlap, their residuals are not coherent. Nothing else stands above the floor.
 TEST(GapUnexplained, LocalisesADrivingJointAndASharedMode) {
   const Model model = diagnosing_model();
-  const InertialRegressor regressor(model);
-  const Part part = evaluate_part(model, regressor, filter_log(plain_log(model, 10.0, 23), FilterOptions{}));
+  const Part part = evaluate_part(model, filter_log(plain_log(model, 10.0, 23), FilterOptions{}));
   const auto n = static_cast<Eigen::Index>(part.samples.size());
   const double sample_period = part.samples.t[1] - part.samples.t[0];
   double mean_torque = 0.0;
@@ -695,7 +693,7 @@ TEST(GapEffects, DahlStateIsTheExactSolutionOfItsOde) {
 // The ripple effect's analytic Jacobian against central differences of its torque.
 TEST(GapEffects, RippleJacobianMatchesFiniteDifferences) {
   const Model model = diagnosing_model();
-  const Part part = evaluate_part(model, InertialRegressor(model), filter_log(plain_log(model, 2.0, 3), FilterOptions{}));
+  const Part part = evaluate_part(model, filter_log(plain_log(model, 2.0, 3), FilterOptions{}));
   const auto library = effect_library(model);
   const Effect& ripple = *library[8];
   ASSERT_EQ(ripple.name(), "position_ripple");
@@ -716,7 +714,7 @@ TEST(GapEffects, RippleJacobianMatchesFiniteDifferences) {
 // physical links (masses > 0 whatever theta).
 TEST(GapEffects, PhysicalInertialParametersFitPhysicalLinks) {
   const Model model = diagnosing_model();
-  const Part part = evaluate_part(model, InertialRegressor(model), filter_log(plain_log(model, 2.0, 3), FilterOptions{}));
+  const Part part = evaluate_part(model, filter_log(plain_log(model, 2.0, 3), FilterOptions{}));
   const std::unique_ptr<Effect> physical = physical_inertial_parameters(model);
   ASSERT_TRUE(physical);
   EXPECT_EQ(physical->name(), "inertial_parameters");
@@ -758,7 +756,7 @@ TEST(GapEffects, PhysicalInertialParametersFitPhysicalLinks) {
 TEST(GapEffects, FrictionJacobianMatchesFiniteDifferences) {
   const Model model = diagnosing_model();
   const JointLog log = plain_log(model, 2.0, 3);
-  const Part part = evaluate_part(model, InertialRegressor(model), filter_log(log, FilterOptions{}));
+  const Part part = evaluate_part(model, filter_log(log, FilterOptions{}));
   const auto library = effect_library(model);
   const Effect& friction = *library[0];
   ASSERT_EQ(friction.name(), "joint_friction");

@@ -828,11 +828,10 @@ std::vector<EffectDrift> effect_drift(const EffectSet& selected, const Part& tra
 Diagnosis diagnose(const Model& model, const JointLog& train_log, const JointLog& heldout_log,
                    const DiagnosisOptions& options) {
   const std::vector<std::unique_ptr<Effect>> library = effect_library(model);
-  const InertialRegressor regressor(model);
   Diagnosis d;
   report(options.progress, "filtering and predicting", 0, 0);
-  d.train = evaluate_part(model, regressor, filter_log(train_log, options.filter));
-  d.heldout = evaluate_part(model, regressor, filter_log(heldout_log, options.filter));
+  d.train = evaluate_part(model, filter_log(train_log, options.filter));
+  d.heldout = evaluate_part(model, filter_log(heldout_log, options.filter));
   const Part& train = d.train;
   const Part& heldout = d.heldout;
   d.baseline_train_rms = rms(train.residual);

@@ -7,9 +7,9 @@
 
 namespace csp::gap {
 
-// All samples at once (dynamics/batch.hpp), which gives the one-state algorithms' results to rounding;
-// the regressor is the model's, as `regressor` would give it.
-Part evaluate_part(const Model& model, const InertialRegressor& /*regressor*/, Samples samples) {
+// All samples at once (dynamics/batch.hpp: the one-state rnea's and InertialRegressor's results to
+// rounding).
+Part evaluate_part(const Model& model, Samples samples) {
   Part part;
   const std::size_t n = samples.size();
   StateBatch states(static_cast<Eigen::Index>(n));

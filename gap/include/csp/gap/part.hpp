@@ -24,7 +24,7 @@ struct Part {
   Eigen::Index rows() const { return residual.size(); }
 };
 
-Part evaluate_part(const Model& model, const InertialRegressor& regressor, Samples samples);
+Part evaluate_part(const Model& model, Samples samples);
 
 // The samples of `part` where keep[k] (the uniform grid stays whole: the fast laws run along it).
 Part subset(const Part& part, const std::vector<bool>& keep);
