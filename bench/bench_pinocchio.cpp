@@ -95,7 +95,8 @@ const PinocchioArm& pinocchio_arm() {
     const Transform link7_T_EE = p.link7_T_flange * p.F_T_EE;
     arm.flange = arm.model.addFrame(pinocchio::Frame("flange", joint, to_se3(p.link7_T_flange), pinocchio::OP_FRAME));
     arm.end_effector = arm.model.addFrame(pinocchio::Frame("EE", joint, to_se3(link7_T_EE), pinocchio::OP_FRAME));
-    arm.stiffness = arm.model.addFrame(pinocchio::Frame("K", joint, to_se3(link7_T_EE * p.EE_T_K), pinocchio::OP_FRAME));
+    const Transform link7_T_K = link7_T_EE * p.EE_T_K;
+    arm.stiffness = arm.model.addFrame(pinocchio::Frame("K", joint, to_se3(link7_T_K), pinocchio::OP_FRAME));
     arm.model.gravity.linear(model().gravity());
     arm.model.armature = model().armature();
     arm.model_without_gravity = arm.model;
@@ -109,7 +110,7 @@ const PinocchioArm& pinocchio_arm() {
 
 struct States {
   std::vector<Vector7> q, dq, ddq, tau;            // CSP's types; tau = rnea(q, dq, ddq)
-  std::vector<Eigen::VectorXd> pq, pdq, ptau;      // the same, Pinocchio's configuration/tangent type
+  std::vector<Eigen::VectorXd> pq, pdq, pddq, ptau;   // the same, Pinocchio's configuration/tangent type
 };
 
 const States& states() {
@@ -133,6 +134,7 @@ const States& states() {
       s.tau.push_back(tau);
       s.pq.emplace_back(q);
       s.pdq.emplace_back(dq);
+      s.pddq.emplace_back(ddq);
       s.ptau.emplace_back(tau);
     }
     return s;
@@ -159,6 +161,9 @@ struct Agreement {
   double worst = 0.0;   // largest relative difference over all states
 };
 
+enum Quantity { kForwardKinematics, kFkJacobian, kRnea, kGravity, kCoriolis, kCoriolisMatrix, kMassMatrix,
+                kForwardDynamics, kForwardDynamicsCholesky };
+
 // Every quantity of both libraries on every state; prints the worst differences, false if one is too large.
 bool libraries_agree(std::vector<Agreement>& agreement) {
   const States& s = states();
@@ -170,8 +175,8 @@ bool libraries_agree(std::vector<Agreement>& agreement) {
   pinocchio::Data::Matrix6x pJ = pinocchio::Data::Matrix6x::Zero(6, arm.model.nv);
   agreement = {{"ForwardKinematics"}, {"FkJacobian"}, {"Rnea"}, {"Gravity"}, {"Coriolis"},
                {"CoriolisMatrix"}, {"MassMatrix"}, {"ForwardDynamics"}, {"ForwardDynamicsCholesky"}};
-  auto record = [&agreement](int row, double difference) {
-    agreement[row].worst = std::max(agreement[row].worst, difference);
+  auto record = [&agreement](Quantity quantity, double difference) {
+    agreement[quantity].worst = std::max(agreement[quantity].worst, difference);
   };
   for (std::size_t k = 0; k < kNumStates; ++k) {
     const Eigen::VectorXd &q = s.pq[k], &dq = s.pdq[k], &tau = s.ptau[k];
@@ -179,40 +184,43 @@ bool libraries_agree(std::vector<Agreement>& agreement) {
     forward_kinematics(model(), data, s.q[k]);
     pinocchio::forwardKinematics(arm.model, pd, q);
     pinocchio::updateFramePlacements(arm.model, pd);
-    for (int i = 0; i < kNumJoints; ++i)
-      record(0, relative_difference(pd.oMi[i + 1].toHomogeneousMatrix(), data.O_T_joint[i].matrix()));
-    record(0, relative_difference(pd.oMf[arm.flange].toHomogeneousMatrix(), data.O_T_F.matrix()));
-    record(0, relative_difference(pd.oMf[arm.end_effector].toHomogeneousMatrix(), data.O_T_EE.matrix()));
-    record(0, relative_difference(pd.oMf[arm.stiffness].toHomogeneousMatrix(), data.O_T_K.matrix()));
+    auto record_pose = [&](const pinocchio::SE3& pose, const Transform& csp_pose) {
+      record(kForwardKinematics, relative_difference(pose.toHomogeneousMatrix(), csp_pose.matrix()));
+    };
+    for (int i = 0; i < kNumJoints; ++i) record_pose(pd.oMi[i + 1], data.O_T_joint[i]);
+    record_pose(pd.oMf[arm.flange], data.O_T_F);
+    record_pose(pd.oMf[arm.end_effector], data.O_T_EE);
+    record_pose(pd.oMf[arm.stiffness], data.O_T_K);
 
     zero_jacobian(data, Frame::kEndEffector, J);
     pinocchio::computeFrameJacobian(arm.model, pd, q, arm.end_effector, pinocchio::LOCAL_WORLD_ALIGNED, pJ);
-    record(1, relative_difference(pJ, J));
+    record(kFkJacobian, relative_difference(pJ, J));
 
     rnea(model(), data, s.q[k], s.dq[k], s.ddq[k], out);
-    record(2, relative_difference(pinocchio::rnea(arm.model, pd, q, dq, Eigen::VectorXd(s.ddq[k])), out));
+    record(kRnea, relative_difference(pinocchio::rnea(arm.model, pd, q, dq, s.pddq[k]), out));
     gravity_torque(model(), data, s.q[k], out);
-    record(3, relative_difference(pinocchio::computeGeneralizedGravity(arm.model, pd, q), out));
+    record(kGravity, relative_difference(pinocchio::computeGeneralizedGravity(arm.model, pd, q), out));
     coriolis_torque(model(), data, s.q[k], s.dq[k], out);
-    record(4, relative_difference(pinocchio::nonLinearEffects(arm.model_without_gravity, pd, q, dq), out));
+    record(kCoriolis, relative_difference(pinocchio::nonLinearEffects(arm.model_without_gravity, pd, q, dq), out));
     // The Coriolis matrix is not unique; both are the factorisation with dM/dt - 2C skew-symmetric.
     coriolis_matrix(model(), data, s.q[k], s.dq[k]);
-    record(5, relative_difference(pinocchio::computeCoriolisMatrix(arm.model, pd, q, dq), data.coriolis_matrix));
+    pinocchio::computeCoriolisMatrix(arm.model, pd, q, dq);
+    record(kCoriolisMatrix, relative_difference(pd.C, data.coriolis_matrix));
 
     crba(model(), data, s.q[k]);
     pinocchio::crba(arm.model, pd, q);
     pd.M.triangularView<Eigen::StrictlyLower>() = pd.M.transpose().triangularView<Eigen::StrictlyLower>();
-    record(6, relative_difference(pd.M, data.mass_matrix));
+    record(kMassMatrix, relative_difference(pd.M, data.mass_matrix));
 
     aba(model(), data, s.q[k], s.dq[k], s.tau[k]);
-    record(7, relative_difference(pinocchio::aba(arm.model, pd, q, dq, tau), data.ddq));
+    record(kForwardDynamics, relative_difference(pinocchio::aba(arm.model, pd, q, dq, tau), data.ddq));
     forward_dynamics_cholesky(model(), data, s.q[k], s.dq[k], s.tau[k]);
     pinocchio::crba(arm.model, pd, q);
     pinocchio::nonLinearEffects(arm.model, pd, q, dq);
     pinocchio::cholesky::decompose(arm.model, pd);
     Eigen::VectorXd ddq = tau - pd.nle;
     pinocchio::cholesky::solve(arm.model, pd, ddq);
-    record(8, relative_difference(ddq, data.ddq));
+    record(kForwardDynamicsCholesky, relative_difference(ddq, data.ddq));
   }
   bool agree = true;
   std::fprintf(stderr, "CSP vs Pinocchio, largest relative difference over %zu states (limit %.0e):\n", kNumStates,
@@ -281,9 +289,9 @@ void BM_Rnea_CSP(benchmark::State& state) {
 void BM_Rnea_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model);
-  std::vector<Eigen::VectorXd> ddq(states().ddq.begin(), states().ddq.end());
+  const States& s = states();
   over_states(state, [&](std::size_t k) {
-    pinocchio::rnea(arm.model, pd, states().pq[k], states().pdq[k], ddq[k]);
+    pinocchio::rnea(arm.model, pd, s.pq[k], s.pdq[k], s.pddq[k]);
     benchmark::DoNotOptimize(pd.tau);
   });
 }
