@@ -157,8 +157,8 @@ def main():
     if "KDL" in peers:
         print(f"- KDL {context.get('kdl_version', '?')} (distribution package); model: {context.get('csp_model', '?')}")
     if "Pinocchio" in peers:
-        print(f"- Pinocchio {context.get('pinocchio_version', '?')} header-only, built with CSP's compiler and flags;"
-              f" model: {context.get('csp_model', '?')}")
+        print(f"- Pinocchio {context.get('pinocchio_version', '?')} header-only, compiled in the bench (compiler"
+              f" above, CSP's flags); model: {context.get('csp_model', '?')}")
         agreement = {key[len("agreement_"):]: value for key, value in context.items() if key.startswith("agreement_")}
         if agreement:
             worst = max(agreement, key=lambda quantity: float(agreement[quantity]))
