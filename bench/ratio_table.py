@@ -1,11 +1,12 @@
 #!/usr/bin/python3
-"""Markdown table of CSP against KDL from `csp_bench --benchmark_format=json` output.
+"""Markdown table of CSP against its peers from `csp_bench --benchmark_format=json` output.
 
     build/bench/csp_bench --benchmark_format=json > bench.json
     /usr/bin/python3 bench/ratio_table.py bench.json            # or: ... | ratio_table.py -
 
-Benchmarks are paired by name, BM_<Quantity>_CSP with BM_<Quantity>_KDL (TWINS lists the CSP
-quantities whose KDL twin has another name). With --benchmark_repetitions, --stat picks the
+Benchmarks are paired by name, BM_<Quantity>_CSP with BM_<Quantity>_<Peer>, the peer KDL
+(csp_bench) or Pinocchio (csp_pinocchio_bench); a column pair per peer in the runs (TWINS lists
+the CSP quantities whose twin has another name). With --benchmark_repetitions, --stat picks the
 median (default) or the minimum over the repetitions; the minimum is the steadier figure on a
 machine shared with other work, e.g.
 
@@ -23,10 +24,11 @@ import signal
 import statistics
 import sys
 
-# CSP quantity -> the KDL quantity it is compared with, where the names differ.
-TWINS = {"ForwardDynamicsCholesky": "ForwardDynamics"}
-# CSP quantities without a KDL counterpart, and why.
-NO_TWIN = {"CoriolisMatrix": "KDL has no Coriolis matrix (only C(q,dq) dq)"}
+PEERS = ("KDL", "Pinocchio")
+# Per peer: CSP quantity -> the peer's quantity it is compared with, where the names differ.
+TWINS = {"KDL": {"ForwardDynamicsCholesky": "ForwardDynamics"}}
+# Per peer: CSP quantities without a counterpart, and why.
+NO_TWIN = {"KDL": {"CoriolisMatrix": "KDL has no Coriolis matrix (only C(q,dq) dq)"}}
 # Targets for CSP on the project's 2-core reference machine [ns] (printed with --targets).
 TARGETS_NS = {"Rnea": 250, "MassMatrix": 200, "ForwardDynamics": 500, "FkJacobian": 150}
 
@@ -78,11 +80,11 @@ def times_ns(benchmarks, key, stat):
 
 
 def split(name):
-    """BM_<Quantity>_<CSP|KDL> -> (Quantity, side), or None."""
+    """BM_<Quantity>_<CSP|Peer> -> (Quantity, side), or None."""
     if not name.startswith("BM_"):
         return None
     quantity, _, side = name[3:].rpartition("_")
-    return (quantity, side) if side in ("CSP", "KDL") and quantity else None
+    return (quantity, side) if (side == "CSP" or side in PEERS) and quantity else None
 
 
 def fmt(ns):
@@ -106,32 +108,39 @@ def main():
     for b in data.get("benchmarks", []):
         name = b.get("run_name", b["name"])
         family[name] = min(family.get(name, 1 << 30), b.get("family_index", len(family)))
-    csp, kdl, order = {}, {}, []
+    sides, order = {}, []   # side -> quantity -> ns
     for name in sorted(times, key=lambda n: family.get(n, 0)):
         parsed = split(name)
         if parsed is None:
             continue
         quantity, side = parsed
-        (csp if side == "CSP" else kdl)[quantity] = times[name]
+        sides.setdefault(side, {})[quantity] = times[name]
         if side == "CSP":
             order.append(quantity)
+    csp = sides.get("CSP", {})
+    peers = [peer for peer in PEERS if peer in sides]
 
-    header = ["Quantity", "CSP [ns]", "KDL [ns]", "KDL/CSP"]
+    header = ["Quantity", "CSP [ns]"]
+    for peer in peers:
+        header += [f"{peer} [ns]", f"{peer}/CSP"]
     if args.targets:
         header.append("CSP target [ns]")
     print("| " + " | ".join(header) + " |")
     print("|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|")
     notes = []
     for quantity in order:
-        twin = TWINS.get(quantity, quantity)
-        label = quantity if twin == quantity else f"{quantity} (KDL: {twin})"
-        row = [label, fmt(csp[quantity])]
-        if twin in kdl:
-            row += [fmt(kdl[twin]), f"{kdl[twin] / csp[quantity]:.2f}"]
-        else:
-            row += ["—", "—"]
-            if quantity in NO_TWIN:
-                notes.append(f"{quantity}: {NO_TWIN[quantity]}.")
+        label, row = quantity, []
+        for peer in peers:
+            twin = TWINS.get(peer, {}).get(quantity, quantity)
+            if twin != quantity:
+                label += f" ({peer}: {twin})"
+            if twin in sides[peer]:
+                row += [fmt(sides[peer][twin]), f"{sides[peer][twin] / csp[quantity]:.2f}"]
+            else:
+                row += ["—", "—"]
+                if quantity in NO_TWIN.get(peer, {}):
+                    notes.append(f"{quantity}: {NO_TWIN[peer][quantity]}.")
+        row = [label, fmt(csp[quantity])] + row
         if args.targets:
             target = TARGETS_NS.get(quantity)
             row.append("" if target is None else f"{target} ({'met' if csp[quantity] <= target else 'MISSED'})")
@@ -145,7 +154,16 @@ def main():
     over = f", {args.stat} of {repetitions} runs" if repetitions > 1 else ""
     print(f"- {args.time} time per call{over}; compiler: {compiler}; CSP flags: `{' '.join(flags.split())}`"
           f" ({context.get('csp_build_type', 'build type unknown')})")
-    print(f"- KDL {context.get('kdl_version', '?')} (distribution package); model: {context.get('csp_model', '?')}")
+    if "KDL" in peers:
+        print(f"- KDL {context.get('kdl_version', '?')} (distribution package); model: {context.get('csp_model', '?')}")
+    if "Pinocchio" in peers:
+        print(f"- Pinocchio {context.get('pinocchio_version', '?')} header-only, compiled in the bench (compiler"
+              f" above, CSP's flags); model: {context.get('csp_model', '?')}")
+        agreement = {key[len("agreement_"):]: value for key, value in context.items() if key.startswith("agreement_")}
+        if agreement:
+            worst = max(agreement, key=lambda quantity: float(agreement[quantity]))
+            print(f"- CSP and Pinocchio agree on every quantity and state to {agreement[worst]} relative"
+                  f" (largest: {worst})")
     mhz = context.get("mhz_per_cpu")
     print(f"- host: {context.get('host_name', '?')}, {context.get('num_cpus', '?')} CPUs"
           f"{f' at {mhz} MHz' if mhz else ''}, date {context.get('date', '?')}")
