@@ -108,6 +108,7 @@ LinkParameters to_log_cholesky(const LinkParameters& p) {
 namespace {
 
 using LinkRegressor = Eigen::Matrix<double, 6, kLinkParameters>;   // (force; moment) per parameter
+constexpr int kFirstInertiaColumn = 4;                               // m, h (3), then I_O (6)
 
 // L(a) with I a = L(a) (Ixx, Ixy, Ixz, Iyy, Iyz, Izz) for a symmetric I.
 Eigen::Matrix<double, 3, 6> inertia_product(const Vector3& a) {
@@ -160,11 +161,15 @@ InertialRegressorRows InertialRegressor::operator()(Data& data, const Vector7& q
       if (j == 0) break;
       const JointGeometry& child = model_.joint(j);
       const double cj = data.cos_theta[j], sj = data.sin_theta[j];
-      for (int k = 0; k < kLinkParameters; ++k) {
+      for (int k = 0; k < kFirstInertiaColumn; ++k) {
         const Vector3 force = child.rotate(cj, sj, A.block<3, 1>(0, k));
         A.block<3, 1>(3, k) = child.rotate(cj, sj, A.block<3, 1>(3, k)) + child.origin.cross(force);
         A.block<3, 1>(0, k) = force;
       }
+      // The rotational inertia's columns have no force, and a pure moment moved to the parent's
+      // origin stays what it was, rotated: a third of a wrench's work.
+      for (int k = kFirstInertiaColumn; k < kLinkParameters; ++k)
+        A.block<3, 1>(3, k) = child.rotate(cj, sj, A.block<3, 1>(3, k));
     }
   }
   return Y;
