@@ -26,15 +26,6 @@ using StateRow = Eigen::Matrix<double, 1, kState>;
 enum Group { kPosition, kVelocity, kAcceleration, kJerk, kTorque, kGroups };
 const char* const kGroupNames[kGroups] = {"q", "dq", "ddq", "dddq", "tau"};
 
-// The model's kinematics with the given 70 standard parameters (end effector and load folded in).
-Model model_with_standard_parameters(const Model& model, const Eigen::VectorXd& standard) {
-  ModelParameters p = model.parameters();
-  p.end_effector = p.load = RigidBodyInertia{};
-  for (int i = 0; i < kNumJoints; ++i)
-    p.links[i] = rigid_body(spatial_inertia(standard.segment<kLinkParameters>(kLinkParameters * i)));
-  return Model(p);
-}
-
 JointSample perturbed(const JointSample& s, int i, double h) {
   JointSample out = s;
   if (i < kNumJoints) out.q[i] += h;
@@ -211,46 +202,28 @@ double ExcitationProblem::criterion(const std::vector<double>& x, std::vector<do
   const Criterion c = design_value(A, lambda);
   if (gradient) {
     // dPhi/dW = 2 P W dPhi/dA = G. Per sample, dPhi/ds = d/ds <G_k, W_k(s)> with W_k = Sigma^-1/2 R S, i.e.
-    // <H, R(s)> with H = Sigma^-1/2 G_k S. The inertial part is sum_j Y_j(s) h_j (row j of H on the base
-    // columns): the torque is linear in the standard parameters, so Y_j(s) h_j is joint j's RNEA torque
-    // of an arm whose parameters are h_j (taken as nominal + alpha h_j minus nominal, alpha keeping
-    // every mass positive): 7 RNEA per state instead of the 71 of a regressor. Its derivatives in
-    // (q, dq, ddq) by forward differences; the friction columns analytically.
+    // <H, R(s)> with H = Sigma^-1/2 G_k S. The inertial part is phi(s) = sum_j Y_j(s) h_j (row j of the
+    // regressor, h_j row j of H on the base columns); its derivatives in (q, dq, ddq) by forward
+    // differences, the sample and its 21 perturbed states in one batch of regressors; the friction
+    // columns analytically.
     const Eigen::MatrixXd G = 2.0 * periods * W * c.gradient;
     const int nb = id_.base_parameters();
-    const Eigen::VectorXd& nominal = id_.standard();
-    double lightest = INFINITY;
-    for (int i = 0; i < kNumJoints; ++i) lightest = std::min(lightest, nominal[kLinkParameters * i]);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(x.size()));
-    Data data;
+    std::vector<JointSample> around(1 + kState);   // the sample, then each perturbed state
+    Eigen::MatrixXd Y;
     for (int k = 0; k < samples; ++k) {
       const JointSample& s = states[static_cast<std::size_t>(k)];
       const Eigen::MatrixXd H = id_.noise_sigma().cwiseInverse().asDiagonal() * G.middleRows(kNumJoints * k, kNumJoints) *
                                 id_.column_scale().asDiagonal();
-      std::array<Model, kNumJoints> weighted{model_, model_, model_, model_, model_, model_, model_};
-      Vector7 alpha = Vector7::Zero();
-      for (int j = 0; j < kNumJoints; ++j) {
-        Eigen::VectorXd h = Eigen::VectorXd::Zero(kInertialParameters);
-        h(id_.base_columns()) = H.row(j).head(nb).transpose();
-        const double largest = h.cwiseAbs().maxCoeff();
-        if (largest == 0.0) continue;
-        alpha[j] = 1e-3 * lightest / largest;
-        weighted[j] = model_with_standard_parameters(model_, nominal + alpha[j] * h);
-      }
-      const auto phi = [&](const JointSample& state) {   // sum_j Y_j(state) h_j
-        Vector7 tau0, tau;
-        rnea(model_, data, state.q, state.dq, state.ddq, tau0);
-        double sum = 0.0;
-        for (int j = 0; j < kNumJoints; ++j)
-          if (alpha[j] != 0.0) {
-            rnea(weighted[j], data, state.q, state.dq, state.ddq, tau);
-            sum += (tau[j] - tau0[j]) / alpha[j];
-          }
-        return sum;
-      };
-      const double phi0 = phi(s);
+      Eigen::Matrix<double, kNumJoints, kInertialParameters> h = Eigen::Matrix<double, kNumJoints, kInertialParameters>::Zero();
+      h(Eigen::all, id_.base_columns()) = H.leftCols(nb);
+      around[0] = s;
+      for (int i = 0; i < kState; ++i) around[static_cast<std::size_t>(1 + i)] = perturbed(s, i, kStep);
+      inertial_regressor_batch(model_, state_batch(around), Y);
+      const auto phi = [&](int m) { return Y.middleRows<kNumJoints>(kNumJoints * m).cwiseProduct(h).sum(); };
+      const double phi0 = phi(0);
       StateRow ds;
-      for (int i = 0; i < kState; ++i) ds[i] = (phi(perturbed(s, i, kStep)) - phi0) / kStep;
+      for (int i = 0; i < kState; ++i) ds[i] = (phi(1 + i) - phi0) / kStep;
       for (int j = 0; j < kNumJoints; ++j) {   // d/d dq_j of dq_j and tanh(dq_j / v)
         const int col = nb + kFrictionParametersPerJoint * j;
         const double th = std::tanh(s.dq[j] / kCoulombVelocity);

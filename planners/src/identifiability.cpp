@@ -107,8 +107,7 @@ Eigen::MatrixXd IdentificationModel::scale_rows(const Eigen::MatrixXd& rows) con
   return sigma_.cwiseInverse().asDiagonal() * rows * scale_.asDiagonal();
 }
 
-// The inertial regressors of all samples at once (dynamics/batch.hpp), then each sample's friction columns.
-Eigen::MatrixXd IdentificationModel::stacked(const std::vector<JointSample>& samples) const {
+StateBatch state_batch(const std::vector<JointSample>& samples) {
   StateBatch states(static_cast<Eigen::Index>(samples.size()));
   for (std::size_t k = 0; k < samples.size(); ++k) {
     const auto column = static_cast<Eigen::Index>(k);
@@ -116,8 +115,13 @@ Eigen::MatrixXd IdentificationModel::stacked(const std::vector<JointSample>& sam
     states.dq.col(column) = samples[k].dq;
     states.ddq.col(column) = samples[k].ddq;
   }
+  return states;
+}
+
+// The inertial regressors of all samples at once (dynamics/batch.hpp), then each sample's friction columns.
+Eigen::MatrixXd IdentificationModel::stacked(const std::vector<JointSample>& samples) const {
   Eigen::MatrixXd Y;
-  inertial_regressor_batch(model_, states, Y);
+  inertial_regressor_batch(model_, state_batch(samples), Y);
   Eigen::MatrixXd W(Y.rows(), parameters());
   W.leftCols(base_parameters()) = Y(Eigen::all, base_);
   for (std::size_t k = 0; k < samples.size(); ++k)

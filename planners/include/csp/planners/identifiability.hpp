@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include "csp/dynamics/batch.hpp"
 #include "csp/dynamics/regressor.hpp"
 #include "csp/planners/fourier.hpp"
 
@@ -31,6 +32,9 @@ Vector7 real_log_torque_noise();
 // Velocity of the Coulomb column's tanh [rad/s].
 constexpr double kCoulombVelocity = 0.01;
 constexpr int kFrictionParametersPerJoint = 3;
+
+// The samples' (q, dq, ddq) as one batch for dynamics/batch.hpp (column k: sample k).
+StateBatch state_batch(const std::vector<JointSample>& samples);
 
 class IdentificationModel {
  public:
