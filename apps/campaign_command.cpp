@@ -74,9 +74,11 @@ int finish_slurm_campaign(const CampaignArguments& args) {
                 dir.dir.c_str(), undone, status.total, submission.array_job.c_str(), submission.tasks, options.retries);
     return 0;
   }
+  // The table first: its last line says it is written (what scripts wait for).
+  const int collected = print_collected(dir);
   std::printf("csp campaign finish: %s: %d of %d cases done%s\n", dir.dir.c_str(), status.done, status.total,
               undone ? ", no retries left (the same csp campaign --slurm again submits the rest)" : "");
-  return print_collected(dir);
+  return collected;
 }
 
 int run_campaign(const CampaignArguments& args) {

@@ -42,8 +42,8 @@ echo "csp campaign --jobs $JOBS:        $(rate "$RUNS" "$start" "$end")"
 if [ -n "${SLURM_CONF:-}" ]; then
   start=$(now)
   "$CSP" campaign "$WORK/campaign.yaml" --out "$WORK/slurm" --slurm --array-size "$JOBS" > /dev/null
-  until "$CSP" campaign status "$WORK/slurm" > /dev/null 2>&1; do sleep 0.2; done
-  "$CSP" campaign collect "$WORK/slurm" > /dev/null
+  # The array's finishing job writes the table: its line "... N of N cases done".
+  until grep -qs "^csp campaign finish: .*: \([0-9]*\) of \1 cases done$" "$WORK/slurm"/slurm/finish_*.out; do sleep 0.2; done
   end=$(now)
-  echo "csp campaign --slurm, $JOBS tasks: $(rate "$RUNS" "$start" "$end") (submission to collected table)"
+  echo "csp campaign --slurm, $JOBS tasks: $(rate "$RUNS" "$start" "$end") (submission to the finishing job's table)"
 fi
