@@ -26,7 +26,7 @@ void articulated_body(const Model& model, Data& data, const Vector7& q, const Ve
   Matrix6 I_A = data.O_inertia[kNumJoints - 1].matrix();
   Vector6 p_A = p[kNumJoints - 1];
   Vector6 U = I_A * data.axis[kNumJoints - 1];
-  std::array<double, kNumJoints> D_inverse;
+  std::array<double, kNumJoints> D_inverse, U_dot_S_parent{};
   for (int i = kNumJoints - 1; i >= 0; --i) {
     const Vector6& S = data.axis[i];
     data.U[i] = U;
@@ -42,16 +42,22 @@ void articulated_body(const Model& model, Data& data, const Vector7& q, const Ve
       I_A += data.O_inertia[i - 1].matrix();
       const Vector6 W = I_A * S_parent;
       I_A.noalias() -= (U * D_inverse[i]) * U.transpose();
-      U = W - U * (U.dot(S_parent) * D_inverse[i]);
+      U_dot_S_parent[i] = U.dot(S_parent);
+      U = W - U * (U_dot_S_parent[i] * D_inverse[i]);
     }
   }
 
-  // Pass 3 (base to tip): accelerations. The base accelerates upwards against gravity.
+  // Pass 3 (base to tip): ddq_i = (u_i - U_i . a_i') / D_i with a_i' = a_parent + c_i. The parent's
+  // own joint term enters by the scalar U_i . S_parent from pass 2, so each ddq waits one multiply-add
+  // for the last, not a 6-vector update and a dot product. a is a_parent less S_parent ddq_parent.
+  // The base accelerates upwards against gravity.
   Vector6 a = linear_angular(-model.gravity(), Vector3::Zero());
+  double ddq_parent = 0.0;
   for (int i = 0; i < kNumJoints; ++i) {
     a += data.bias_acceleration[i];
-    data.ddq[i] = (data.u[i] - data.U[i].dot(a)) * D_inverse[i];
-    a += data.axis[i] * data.ddq[i];
+    data.ddq[i] = (data.u[i] - data.U[i].dot(a) - U_dot_S_parent[i] * ddq_parent) * D_inverse[i];
+    if (i > 0) a += data.axis[i - 1] * ddq_parent;
+    ddq_parent = data.ddq[i];
   }
 }
 
