@@ -1,8 +1,10 @@
 // The specialised algorithms (issue 29) against their textbook forms, written out here as the
 // library had them before: the Coriolis matrix in full 6x6 spatial algebra in base coordinates, the
-// inertial regressor by its definition (differences of RNEA). Same quantity, other arithmetic.
+// inertial regressor by its definition (differences of RNEA), and the two forward dynamics against
+// the inverse dynamics they invert. Same quantity, other arithmetic.
 // Seeded random states, the Panda (gaz2019 with the Hand) and the FR3, with and without armature.
 // Tolerance 1e-12 relative to the largest entry of the reference: only rounding differs.
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -143,6 +145,45 @@ TEST(DynamicsFast, RegressorMatchesDifferencesOfRnea) {
       Eigen::Matrix<double, kInertialParameters, 1> pi;
       for (int i = 0; i < kNumJoints; ++i) pi.segment<kLinkParameters>(kLinkParameters * i) = link_parameters(arm.model.body(i));
       ASSERT_TRUE(relatively_near(Vector7(Y * pi + arm.model.armature().cwiseProduct(ddq)), tau));
+    }
+  }
+}
+
+// Both forward dynamics (aba; crba + rnea bias + LDL^T) are inverted by RNEA: at their ddq, with the
+// same link wrenches, rnea gives back tau (RNEA shares neither one's recursion nor its solve). A
+// solve's residual scales with the terms it balances, |M| |ddq| (the FR3's light wrist without
+// armature reaches thousands of rad/s^2), so the tolerance is relative to those or to tau.
+::testing::AssertionResult inverts_rnea(const Model& model, const Vector7& q, const Vector7& dq, const Vector7& tau,
+                                        const LinkWrenches& f, const Vector7& ddq) {
+  Data data;
+  Vector7 tau_back;
+  rnea(model, data, q, dq, ddq, f, tau_back);
+  crba(model, data, q);
+  const double scale = std::max(tau.cwiseAbs().maxCoeff(), (data.mass_matrix.cwiseAbs() * ddq.cwiseAbs()).maxCoeff());
+  const double worst = (tau_back - tau).cwiseAbs().maxCoeff();
+  if (worst <= kRelative * scale) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "max |rnea(ddq) - tau| " << worst << " > " << kRelative * scale;
+}
+
+TEST(DynamicsFast, ForwardDynamicsAreInvertedByRnea) {
+  for (const FastArm& arm : fast_arms()) {
+    SCOPED_TRACE(arm.name);
+    RandomStates random(31);
+    Data data;
+    for (int k = 0; k < kStates; ++k) {
+      const Vector7 q = random.q(arm.model.parameters().joint_limits), dq = random.uniform(2.5);
+      const Vector7 tau = random.uniform(50.0);
+      const bool with_wrenches = k % 2 == 1;
+      LinkWrenches f = kNoLinkWrenches;
+      if (with_wrenches)
+        for (Vector6& wrench : f) wrench << random.uniform(20.0).head<6>();
+      if (with_wrenches)
+        aba(arm.model, data, q, dq, tau, f);
+      else
+        aba(arm.model, data, q, dq, tau);   // the overload without wrenches has its own path
+      ASSERT_TRUE(inverts_rnea(arm.model, q, dq, tau, f, data.ddq)) << "aba, wrenches " << with_wrenches;
+      forward_dynamics_cholesky(arm.model, data, q, dq, tau, f);
+      ASSERT_TRUE(inverts_rnea(arm.model, q, dq, tau, f, data.ddq)) << "cholesky, wrenches " << with_wrenches;
     }
   }
 }

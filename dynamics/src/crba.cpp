@@ -7,8 +7,7 @@ namespace csp {
 // inertia of bodies i..7 is accumulated from the tip; F = I^c_i S_i is carried down the chain as
 // a force, and M_ji = S_j . F in each ancestor's frame. Every S_j is the link's z axis, so
 // S_j . F is the moment's z component and I^c_i S_i is read off the inertia directly.
-void crba(const Model& model, Data& data, const Vector7& q) {
-  detail::update_joint_angles(model, data, q);
+void detail::composite_rigid_body(const Model& model, Data& data) {
   SpatialInertia composite = model.body(kNumJoints - 1);
   for (int i = kNumJoints - 1; i >= 0; --i) {
     // F = I^c (0; e_z) = (-h x e_z; I_O e_z)
@@ -34,6 +33,11 @@ void crba(const Model& model, Data& data, const Vector7& q) {
   }
   // The rotors add their reflected inertia on the diagonal: M + diag(I_a) (Featherstone sec. 7.3).
   data.mass_matrix.diagonal() += model.armature();
+}
+
+void crba(const Model& model, Data& data, const Vector7& q) {
+  detail::update_joint_angles(model, data, q);
+  detail::composite_rigid_body(model, data);
 }
 
 }  // namespace csp

@@ -44,12 +44,12 @@ const Transform& frame_pose(const Data& data, Frame frame) {
 void zero_jacobian(const Data& data, Frame frame, Matrix6x7& jacobian) {
   const Vector3& p = frame_pose(data, frame).translation;
   const int n = moving_joints(frame);
-  jacobian.setZero();
   for (int j = 0; j < n; ++j) {
     const Vector6& S = data.axis[j];
     // Velocity of the point p: u + w x p (paper eq. 2: z_j x (p - o_j)).
     jacobian.col(j) << S.head<3>() + S.tail<3>().cross(p), S.tail<3>();
   }
+  jacobian.rightCols(kNumJoints - n).setZero();   // joints beyond the frame's link do not move it
 }
 
 Matrix3x7 point_jacobian(const Data& data, int link, const Vector3& point) {

@@ -15,6 +15,9 @@ inline void update_joint_angles(const Model& model, Data& data, const Vector7& q
   joint_sin_cos(theta, data.sin_theta, data.cos_theta);
 }
 
+// crba at the angles already in data.cos_theta, data.sin_theta (src/crba.cpp).
+void composite_rigid_body(const Model& model, Data& data);
+
 // The joint part of forward_kinematics: data.O_T_joint and data.axis (src/kinematics.cpp).
 void update_joint_frames(const Model& model, Data& data, const Vector7& q);
 

@@ -143,9 +143,7 @@ struct Data {
   std::array<SpatialInertia, kNumJoints> O_inertia{};   // body i, base frame (aba, coriolis_matrix)
   std::array<Vector6, kNumJoints> velocity{};           // v_i
   std::array<Vector6, kNumJoints> bias_acceleration{};  // c_i = v_i x S_i dq_i
-  std::array<Matrix6, kNumJoints> articulated{};        // I^A_i (ABA)
-  std::array<Vector6, kNumJoints> bias_force{};         // p^A_i (ABA)
-  std::array<Vector6, kNumJoints> U{};
+  std::array<Vector6, kNumJoints> U{};                  // U_i, D_i, u_i (ABA)
   std::array<double, kNumJoints> D{};
   std::array<double, kNumJoints> u{};
 
@@ -153,7 +151,6 @@ struct Data {
   Matrix7 mass_matrix = Matrix7::Zero();
   Matrix7 coriolis_matrix = Matrix7::Zero();
   Vector7 ddq = Vector7::Zero();
-  Eigen::LLT<Matrix7> mass_cholesky{kNumJoints};
 };
 
 // External wrenches on the links: (force; moment) applied BY the environment ON link i,
