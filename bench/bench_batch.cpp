@@ -1,57 +1,45 @@
-// csp_batch_bench: RNEA and the inertial regressor over N = 1000 states, the one-state algorithm in a
+// csp_batch_bench: RNEA and the inertial regressor over N = 1024 states, the one-state algorithm in a
 // loop against the batched form (dynamics/batch.hpp), per state.
 //
-// Model: Panda, Gaz et al. 2019 inertia, with the Franka Hand (as csp_bench). Seeded random states
-// (q within the joint limits, |dq| <= 2.5 rad/s, |ddq| <= 10 rad/s^2). The loop writes what the
+// Model and states: csp_bench's (bench_model.hpp, bench_states.hpp), as one batch. The loop writes what the
 // callers stack: a 7 x N torque matrix, a 7N x 70 regressor. Every iteration runs both forms on the
 // same states, one after the other (process CPU time each), and the counters are the mean ns per
 // state of each, one_state_ns and batched_ns, and their ratio one_state/batched: one run, one load.
 #include <algorithm>
 #include <cmath>
 #include <ctime>
-#include <random>
-#include <string>
 
 #include <benchmark/benchmark.h>
 
 #include "csp/dynamics/algorithms.hpp"
 #include "csp/dynamics/batch.hpp"
-#include "csp/io/robot_config.hpp"
+#include "bench_model.hpp"
 
 namespace {
 
 using namespace csp;
+using bench::model;
 
-constexpr Eigen::Index kStates = 1000;
+constexpr auto kStates = static_cast<Eigen::Index>(bench::kNumStates);
 
-const Model& model() {
-  static const Model instance = [] {
-    ModelOptions options;
-    options.inertia = "gaz2019";
-    options.end_effector = "hand";
-    return Model(model_parameters(load_robot_config(std::string(CSP_SOURCE_DIR) + "/configs/robots/panda.yaml"), options));
-  }();
-  return instance;
-}
-
-const StateBatch& states() {
+// csp_bench's states as one batch.
+const StateBatch& batch() {
   static const StateBatch instance = [] {
-    std::mt19937_64 engine(2029);
-    const JointLimits& limits = model().parameters().joint_limits;
+    const bench::States& s = bench::states();
     StateBatch batch(kStates);
-    for (Eigen::Index k = 0; k < kStates; ++k)
-      for (int i = 0; i < kNumJoints; ++i) {
-        batch.q(i, k) = std::uniform_real_distribution<double>(limits.q_min[i], limits.q_max[i])(engine);
-        batch.dq(i, k) = std::uniform_real_distribution<double>(-2.5, 2.5)(engine);
-        batch.ddq(i, k) = std::uniform_real_distribution<double>(-10.0, 10.0)(engine);
-      }
+    for (Eigen::Index k = 0; k < kStates; ++k) {
+      const auto index = static_cast<std::size_t>(k);
+      batch.q.col(k) = s.q[index];
+      batch.dq.col(k) = s.dq[index];
+      batch.ddq.col(k) = s.ddq[index];
+    }
     return batch;
   }();
   return instance;
 }
 
 void rnea_one_by_one(JointMatrix& tau) {
-  const StateBatch& s = states();
+  const StateBatch& s = batch();
   Data data;
   tau.resize(kNumJoints, s.size());
   for (Eigen::Index k = 0; k < s.size(); ++k) {
@@ -62,7 +50,7 @@ void rnea_one_by_one(JointMatrix& tau) {
 }
 
 void regressor_one_by_one(Eigen::MatrixXd& Y) {
-  const StateBatch& s = states();
+  const StateBatch& s = batch();
   const InertialRegressor regressor(model());
   Data data;
   Y.resize(kNumJoints * s.size(), kInertialParameters);
@@ -70,8 +58,8 @@ void regressor_one_by_one(Eigen::MatrixXd& Y) {
     Y.middleRows<kNumJoints>(kNumJoints * k) = regressor(data, s.q.col(k), s.dq.col(k), s.ddq.col(k));
 }
 
-void rnea_batched(JointMatrix& tau) { rnea_batch(model(), states(), tau); }
-void regressor_batched(Eigen::MatrixXd& Y) { inertial_regressor_batch(model(), states(), Y); }
+void rnea_batched(JointMatrix& tau) { rnea_batch(model(), batch(), tau); }
+void regressor_batched(Eigen::MatrixXd& Y) { inertial_regressor_batch(model(), batch(), Y); }
 
 // CPU time of this process: the machine is shared, and wall time counts the other programs' turns.
 double cpu_ns() {
@@ -103,11 +91,11 @@ void compare(benchmark::State& state, void (*one_state)(Output&), void (*batched
   state.counters["one_state/batched"] = one_state_ns / batched_ns;
 }
 
-void BM_Rnea1000(benchmark::State& state) { compare<JointMatrix>(state, rnea_one_by_one, rnea_batched); }
-void BM_Regressor1000(benchmark::State& state) { compare<Eigen::MatrixXd>(state, regressor_one_by_one, regressor_batched); }
+void BM_RneaBatch(benchmark::State& state) { compare<JointMatrix>(state, rnea_one_by_one, rnea_batched); }
+void BM_RegressorBatch(benchmark::State& state) { compare<Eigen::MatrixXd>(state, regressor_one_by_one, regressor_batched); }
 
-BENCHMARK(BM_Rnea1000)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_Regressor1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RneaBatch)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RegressorBatch)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

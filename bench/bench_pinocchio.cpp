@@ -7,8 +7,7 @@
 // MDH table, carrying CSP's body i (end effector and load lumped on link 7), with the flange, EE and
 // K frames on joint 7 and CSP's gravity and armature. Before any timing every quantity is compared
 // on all states; the program stops if any differs by more than 1e-12 relative.
-// 1024 seeded random states as csp_bench's (q within the joint limits, |dq| <= 2.5 rad/s,
-// |ddq| <= 10 rad/s^2, tau = rnea(q, dq, ddq)) are precomputed in both libraries' types and cycled.
+// csp_bench's model and states (bench_model.hpp, bench_states.hpp), also in Pinocchio's types, cycled.
 // `/usr/bin/python3 bench/ratio_table.py` turns `--benchmark_format=json` into a table.
 //
 //   Quantity                 CSP                          Pinocchio
@@ -27,7 +26,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -42,25 +40,13 @@
 #include <pinocchio/multibody/data.hpp>
 #include <pinocchio/multibody/model.hpp>
 
+#include "bench_model.hpp"
 #include "csp/dynamics/algorithms.hpp"
-#include "csp/io/robot_config.hpp"
 
 namespace csp::bench {
 namespace {
 
-constexpr std::size_t kNumStates = 1024;   // a power of two: the state index is a mask
-static_assert((kNumStates & (kNumStates - 1)) == 0);
 constexpr double kAgreement = 1e-12;       // largest relative difference accepted at start-up
-
-const Model& model() {
-  static const Model instance = [] {
-    ModelOptions options;
-    options.inertia = "gaz2019";
-    options.end_effector = "hand";
-    return Model(model_parameters(load_robot_config(std::string(CSP_SOURCE_DIR) + "/configs/robots/panda.yaml"), options));
-  }();
-  return instance;
-}
 
 // ---- The same arm as a Pinocchio model --------------------------------------------------------
 
@@ -108,36 +94,22 @@ const PinocchioArm& pinocchio_arm() {
 
 // ---- States -------------------------------------------------------------------------------------
 
-struct States {
-  std::vector<Vector7> q, dq, ddq, tau;            // CSP's types; tau = rnea(q, dq, ddq)
-  std::vector<Eigen::VectorXd> pq, pdq, pddq, ptau;   // the same, Pinocchio's configuration/tangent type
+// csp_bench's states (bench_states.hpp) in Pinocchio's configuration/tangent type.
+struct PinocchioStates {
+  std::vector<Eigen::VectorXd> q, dq, ddq, tau;
 };
 
-const States& states() {
-  static const States instance = [] {
-    States s;
-    std::mt19937_64 engine(20240917);   // csp_bench's seed and distributions
-    auto uniform = [&engine](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(engine); };
-    const JointLimits& limits = model().parameters().joint_limits;
-    Data data;
+const PinocchioStates& pinocchio_states() {
+  static const PinocchioStates instance = [] {
+    const States& s = states();
+    PinocchioStates p;
     for (std::size_t k = 0; k < kNumStates; ++k) {
-      Vector7 q, dq, ddq, tau;
-      for (int i = 0; i < kNumJoints; ++i) {
-        q[i] = uniform(limits.q_min[i], limits.q_max[i]);
-        dq[i] = uniform(-2.5, 2.5);
-        ddq[i] = uniform(-10.0, 10.0);
-      }
-      rnea(model(), data, q, dq, ddq, tau);
-      s.q.push_back(q);
-      s.dq.push_back(dq);
-      s.ddq.push_back(ddq);
-      s.tau.push_back(tau);
-      s.pq.emplace_back(q);
-      s.pdq.emplace_back(dq);
-      s.pddq.emplace_back(ddq);
-      s.ptau.emplace_back(tau);
+      p.q.emplace_back(s.q[k]);
+      p.dq.emplace_back(s.dq[k]);
+      p.ddq.emplace_back(s.ddq[k]);
+      p.tau.emplace_back(s.tau[k]);
     }
-    return s;
+    return p;
   }();
   return instance;
 }
@@ -167,6 +139,7 @@ enum Quantity { kForwardKinematics, kFkJacobian, kRnea, kGravity, kCoriolis, kCo
 // Every quantity of both libraries on every state; prints the worst differences, false if one is too large.
 bool libraries_agree(std::vector<Agreement>& agreement) {
   const States& s = states();
+  const PinocchioStates& ps = pinocchio_states();
   const PinocchioArm& arm = pinocchio_arm();
   Data data;
   pinocchio::Data pd(arm.model);
@@ -179,7 +152,7 @@ bool libraries_agree(std::vector<Agreement>& agreement) {
     agreement[quantity].worst = std::max(agreement[quantity].worst, difference);
   };
   for (std::size_t k = 0; k < kNumStates; ++k) {
-    const Eigen::VectorXd &q = s.pq[k], &dq = s.pdq[k], &tau = s.ptau[k];
+    const Eigen::VectorXd &q = ps.q[k], &dq = ps.dq[k], &tau = ps.tau[k];
 
     forward_kinematics(model(), data, s.q[k]);
     pinocchio::forwardKinematics(arm.model, pd, q);
@@ -197,7 +170,7 @@ bool libraries_agree(std::vector<Agreement>& agreement) {
     record(kFkJacobian, relative_difference(pJ, J));
 
     rnea(model(), data, s.q[k], s.dq[k], s.ddq[k], out);
-    record(kRnea, relative_difference(pinocchio::rnea(arm.model, pd, q, dq, s.pddq[k]), out));
+    record(kRnea, relative_difference(pinocchio::rnea(arm.model, pd, q, dq, ps.ddq[k]), out));
     gravity_torque(model(), data, s.q[k], out);
     record(kGravity, relative_difference(pinocchio::computeGeneralizedGravity(arm.model, pd, q), out));
     coriolis_torque(model(), data, s.q[k], s.dq[k], out);
@@ -247,7 +220,7 @@ void BM_ForwardKinematics_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model);
   over_states(state, [&](std::size_t k) {
-    pinocchio::forwardKinematics(arm.model, pd, states().pq[k]);
+    pinocchio::forwardKinematics(arm.model, pd, pinocchio_states().q[k]);
     pinocchio::updateFramePlacements(arm.model, pd);
     benchmark::DoNotOptimize(pd.oMi);
     benchmark::DoNotOptimize(pd.oMf);
@@ -270,7 +243,7 @@ void BM_FkJacobian_Pinocchio(benchmark::State& state) {
   pinocchio::Data pd(arm.model);
   pinocchio::Data::Matrix6x J = pinocchio::Data::Matrix6x::Zero(6, arm.model.nv);
   over_states(state, [&](std::size_t k) {
-    pinocchio::computeFrameJacobian(arm.model, pd, states().pq[k], arm.end_effector, pinocchio::LOCAL_WORLD_ALIGNED, J);
+    pinocchio::computeFrameJacobian(arm.model, pd, pinocchio_states().q[k], arm.end_effector, pinocchio::LOCAL_WORLD_ALIGNED, J);
     benchmark::DoNotOptimize(pd.oMf[arm.end_effector]);
     benchmark::DoNotOptimize(J);
   });
@@ -289,9 +262,9 @@ void BM_Rnea_CSP(benchmark::State& state) {
 void BM_Rnea_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model);
-  const States& s = states();
+  const PinocchioStates& ps = pinocchio_states();
   over_states(state, [&](std::size_t k) {
-    pinocchio::rnea(arm.model, pd, s.pq[k], s.pdq[k], s.pddq[k]);
+    pinocchio::rnea(arm.model, pd, ps.q[k], ps.dq[k], ps.ddq[k]);
     benchmark::DoNotOptimize(pd.tau);
   });
 }
@@ -309,7 +282,7 @@ void BM_Gravity_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model);
   over_states(state, [&](std::size_t k) {
-    pinocchio::computeGeneralizedGravity(arm.model, pd, states().pq[k]);
+    pinocchio::computeGeneralizedGravity(arm.model, pd, pinocchio_states().q[k]);
     benchmark::DoNotOptimize(pd.g);
   });
 }
@@ -327,7 +300,7 @@ void BM_Coriolis_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model_without_gravity);
   over_states(state, [&](std::size_t k) {
-    pinocchio::nonLinearEffects(arm.model_without_gravity, pd, states().pq[k], states().pdq[k]);
+    pinocchio::nonLinearEffects(arm.model_without_gravity, pd, pinocchio_states().q[k], pinocchio_states().dq[k]);
     benchmark::DoNotOptimize(pd.nle);
   });
 }
@@ -344,7 +317,7 @@ void BM_CoriolisMatrix_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model);
   over_states(state, [&](std::size_t k) {
-    pinocchio::computeCoriolisMatrix(arm.model, pd, states().pq[k], states().pdq[k]);
+    pinocchio::computeCoriolisMatrix(arm.model, pd, pinocchio_states().q[k], pinocchio_states().dq[k]);
     benchmark::DoNotOptimize(pd.C);
   });
 }
@@ -361,7 +334,7 @@ void BM_MassMatrix_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model);
   over_states(state, [&](std::size_t k) {
-    pinocchio::crba(arm.model, pd, states().pq[k]);
+    pinocchio::crba(arm.model, pd, pinocchio_states().q[k]);
     benchmark::DoNotOptimize(pd.M);
   });
 }
@@ -378,9 +351,9 @@ void BM_ForwardDynamics_CSP(benchmark::State& state) {
 void BM_ForwardDynamics_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model);
-  const States& s = states();
+  const PinocchioStates& ps = pinocchio_states();
   over_states(state, [&](std::size_t k) {
-    pinocchio::aba(arm.model, pd, s.pq[k], s.pdq[k], s.ptau[k]);
+    pinocchio::aba(arm.model, pd, ps.q[k], ps.dq[k], ps.tau[k]);
     benchmark::DoNotOptimize(pd.ddq);
   });
 }
@@ -398,12 +371,12 @@ void BM_ForwardDynamicsCholesky_Pinocchio(benchmark::State& state) {
   const PinocchioArm& arm = pinocchio_arm();
   pinocchio::Data pd(arm.model);
   Eigen::VectorXd ddq(arm.model.nv);
-  const States& s = states();
+  const PinocchioStates& ps = pinocchio_states();
   over_states(state, [&](std::size_t k) {
-    pinocchio::crba(arm.model, pd, s.pq[k]);
-    pinocchio::nonLinearEffects(arm.model, pd, s.pq[k], s.pdq[k]);
+    pinocchio::crba(arm.model, pd, ps.q[k]);
+    pinocchio::nonLinearEffects(arm.model, pd, ps.q[k], ps.dq[k]);
     pinocchio::cholesky::decompose(arm.model, pd);
-    ddq = s.ptau[k] - pd.nle;
+    ddq = ps.tau[k] - pd.nle;
     pinocchio::cholesky::solve(arm.model, pd, ddq);
     benchmark::DoNotOptimize(ddq);
   });
