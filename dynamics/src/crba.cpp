@@ -2,6 +2,19 @@
 #include "steps.hpp"
 
 namespace csp {
+namespace {
+
+// The z component of ^{i-1}R_i n + p x ^{i-1}R_i f (a wrench moved to the parent frame, RotZ(theta)
+// then RotX(alpha)), without the other five: 11 multiplications instead of 22.
+double z_moment_in_parent(const JointGeometry& joint, double c, double s, const Vector3& force,
+                          const Vector3& moment) {
+  const double force_x = c * force.x() - s * force.y();
+  const double force_y = joint.cos_alpha * (s * force.x() + c * force.y()) - joint.sin_alpha * force.z();
+  const double rotated_moment_z = joint.sin_alpha * (s * moment.x() + c * moment.y()) + joint.cos_alpha * moment.z();
+  return rotated_moment_z + (joint.origin.x() * force_y - joint.origin.y() * force_x);
+}
+
+}  // namespace
 
 // Composite-rigid-body algorithm in link coordinates (Featherstone Table 6.2). The composite
 // inertia of bodies i..7 is accumulated from the tip; F = I^c_i S_i is carried down the chain as
@@ -15,14 +28,18 @@ void detail::composite_rigid_body(const Model& model, Data& data) {
     Vector3 force(-h.y(), h.x(), 0.0);
     Vector3 moment = composite.rotational.col(2);
     data.mass_matrix(i, i) = moment.z();
-    for (int j = i; j > 0; --j) {   // force transform from frame j to frame j-1
+    for (int j = i; j > 1; --j) {   // force transform from frame j to frame j-1
       const JointGeometry& joint = model.joint(j);
       const double c = data.cos_theta[j], s = data.sin_theta[j];
       force = joint.rotate(c, s, force);
       moment = joint.rotate(c, s, moment) + joint.origin.cross(force);
       data.mass_matrix(j - 1, i) = data.mass_matrix(i, j - 1) = moment.z();
     }
-    if (i > 0) {   // I^c_{i-1} = I_{i-1} + (I^c_i expressed in frame i-1)
+    if (i > 0) {
+      // Into frame 0, where nothing is carried further: only the z moment.
+      data.mass_matrix(0, i) = data.mass_matrix(i, 0) =
+          z_moment_in_parent(model.joint(1), data.cos_theta[1], data.sin_theta[1], force, moment);
+      // I^c_{i-1} = I_{i-1} + (I^c_i expressed in frame i-1)
       const JointGeometry& joint = model.joint(i);
       const double c = data.cos_theta[i], s = data.sin_theta[i];
       composite = SpatialInertia{composite.mass, joint.rotate(c, s, composite.first_moment),
