@@ -14,6 +14,21 @@ double z_moment_in_parent(const JointGeometry& joint, double c, double s, const 
   return rotated_moment_z + (joint.origin.x() * force_y - joint.origin.y() * force_x);
 }
 
+// The zz entry of I's rotational inertia expressed in the parent frame about its origin
+// (JointGeometry::rotate_symmetric, then SpatialInertia::shifted), without the other entries.
+double zz_in_parent(const JointGeometry& joint, double c, double s, const SpatialInertia& I) {
+  const Matrix3& R = I.rotational;
+  // RotZ(theta) keeps zz and moves yy and yz; RotX(alpha) then mixes y and z.
+  const double yy = s * s * R(0, 0) + 2.0 * c * s * R(0, 1) + c * c * R(1, 1);
+  const double yz = s * R(0, 2) + c * R(1, 2);
+  const double ca = joint.cos_alpha, sa = joint.sin_alpha;
+  const double zz = sa * sa * yy + 2.0 * ca * sa * yz + ca * ca * R(2, 2);
+  // The parallel axis, (2 h.p + m p.p) - p_z g_z - h_z p_z with g = h + m p, as in shifted().
+  const Vector3 h = joint.rotate(c, s, I.first_moment);
+  const Vector3& p = joint.origin;
+  return zz + 2.0 * h.dot(p) + I.mass * p.squaredNorm() - p.z() * (h.z() + I.mass * p.z()) - h.z() * p.z();
+}
+
 }  // namespace
 
 // Composite-rigid-body algorithm in link coordinates (Featherstone Table 6.2). The composite
@@ -22,7 +37,7 @@ double z_moment_in_parent(const JointGeometry& joint, double c, double s, const 
 // S_j . F is the moment's z component and I^c_i S_i is read off the inertia directly.
 void detail::composite_rigid_body(const Model& model, Data& data) {
   SpatialInertia composite = model.body(kNumJoints - 1);
-  for (int i = kNumJoints - 1; i >= 0; --i) {
+  for (int i = kNumJoints - 1; i > 0; --i) {
     // F = I^c (0; e_z) = (-h x e_z; I_O e_z)
     const Vector3& h = composite.first_moment;
     Vector3 force(-h.y(), h.x(), 0.0);
@@ -35,11 +50,10 @@ void detail::composite_rigid_body(const Model& model, Data& data) {
       moment = joint.rotate(c, s, moment) + joint.origin.cross(force);
       data.mass_matrix(j - 1, i) = data.mass_matrix(i, j - 1) = moment.z();
     }
-    if (i > 0) {
-      // Into frame 0, where nothing is carried further: only the z moment.
-      data.mass_matrix(0, i) = data.mass_matrix(i, 0) =
-          z_moment_in_parent(model.joint(1), data.cos_theta[1], data.sin_theta[1], force, moment);
-      // I^c_{i-1} = I_{i-1} + (I^c_i expressed in frame i-1)
+    // Into frame 0, where nothing is carried further: only the z moment.
+    data.mass_matrix(0, i) = data.mass_matrix(i, 0) =
+        z_moment_in_parent(model.joint(1), data.cos_theta[1], data.sin_theta[1], force, moment);
+    if (i > 1) {   // I^c_{i-1} = I_{i-1} + (I^c_i expressed in frame i-1)
       const JointGeometry& joint = model.joint(i);
       const double c = data.cos_theta[i], s = data.sin_theta[i];
       composite = SpatialInertia{composite.mass, joint.rotate(c, s, composite.first_moment),
@@ -48,6 +62,9 @@ void detail::composite_rigid_body(const Model& model, Data& data) {
       composite += model.body(i - 1);
     }
   }
+  // Joint 1's column is M_11 alone, the zz entry of I^c_0 = I_0 + (I^c_1 expressed in frame 0).
+  data.mass_matrix(0, 0) =
+      model.body(0).rotational(2, 2) + zz_in_parent(model.joint(1), data.cos_theta[1], data.sin_theta[1], composite);
   // The rotors add their reflected inertia on the diagonal: M + diag(I_a) (Featherstone sec. 7.3).
   data.mass_matrix.diagonal() += model.armature();
 }
