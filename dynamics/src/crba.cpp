@@ -38,11 +38,19 @@ double zz_in_parent(const JointGeometry& joint, double c, double s, const Spatia
 void detail::composite_rigid_body(const Model& model, Data& data) {
   SpatialInertia composite = model.body(kNumJoints - 1);
   for (int i = kNumJoints - 1; i > 0; --i) {
-    // F = I^c (0; e_z) = (-h x e_z; I_O e_z)
-    const Vector3& h = composite.first_moment;
-    Vector3 force(-h.y(), h.x(), 0.0);
+    // F = I^c (0; e_z) = (-h x e_z; I_O e_z). The composite inertia's chain is the critical path:
+    // it moves on before this column is carried down.
+    Vector3 force(-composite.first_moment.y(), composite.first_moment.x(), 0.0);
     Vector3 moment = composite.rotational.col(2);
     data.mass_matrix(i, i) = moment.z();
+    if (i > 1) {   // I^c_{i-1} = I_{i-1} + (I^c_i expressed in frame i-1)
+      const JointGeometry& joint = model.joint(i);
+      const double c = data.cos_theta[i], s = data.sin_theta[i];
+      composite = SpatialInertia{composite.mass, joint.rotate(c, s, composite.first_moment),
+                                 joint.rotate_symmetric(c, s, composite.rotational)}
+                      .shifted(joint.origin);
+      composite += model.body(i - 1);
+    }
     for (int j = i; j > 1; --j) {   // force transform from frame j to frame j-1
       const JointGeometry& joint = model.joint(j);
       const double c = data.cos_theta[j], s = data.sin_theta[j];
@@ -53,14 +61,6 @@ void detail::composite_rigid_body(const Model& model, Data& data) {
     // Into frame 0, where nothing is carried further: only the z moment.
     data.mass_matrix(0, i) = data.mass_matrix(i, 0) =
         z_moment_in_parent(model.joint(1), data.cos_theta[1], data.sin_theta[1], force, moment);
-    if (i > 1) {   // I^c_{i-1} = I_{i-1} + (I^c_i expressed in frame i-1)
-      const JointGeometry& joint = model.joint(i);
-      const double c = data.cos_theta[i], s = data.sin_theta[i];
-      composite = SpatialInertia{composite.mass, joint.rotate(c, s, composite.first_moment),
-                                 joint.rotate_symmetric(c, s, composite.rotational)}
-                      .shifted(joint.origin);
-      composite += model.body(i - 1);
-    }
   }
   // Joint 1's column is M_11 alone, the zz entry of I^c_0 = I_0 + (I^c_1 expressed in frame 0).
   data.mass_matrix(0, 0) =
