@@ -188,5 +188,28 @@ TEST(DynamicsFast, ForwardDynamicsAreInvertedByRnea) {
   }
 }
 
+// crba's link-frame recursion against the definition of M: column j is the inverse dynamics at
+// ddq = e_j less that at ddq = 0 (q at rest; RNEA is linear in ddq, so only rounding differs).
+TEST(DynamicsFast, MassMatrixColumnsAreRneaDifferences) {
+  for (const FastArm& arm : fast_arms()) {
+    SCOPED_TRACE(arm.name);
+    RandomStates random(37);
+    Data data;
+    for (int k = 0; k < kStates; ++k) {
+      const Vector7 q = random.q(arm.model.parameters().joint_limits);
+      Vector7 at_rest;
+      rnea(arm.model, data, q, Vector7::Zero(), Vector7::Zero(), kNoLinkWrenches, at_rest);
+      Matrix7 reference;
+      for (int j = 0; j < kNumJoints; ++j) {
+        Vector7 column;
+        rnea(arm.model, data, q, Vector7::Zero(), Vector7::Unit(j), kNoLinkWrenches, column);
+        reference.col(j) = column - at_rest;
+      }
+      crba(arm.model, data, q);
+      ASSERT_TRUE(relatively_near(data.mass_matrix, reference)) << "state " << k;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace csp::test
