@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "batch_trig.hpp"
+#include "steps.hpp"
 
 namespace csp {
 namespace {

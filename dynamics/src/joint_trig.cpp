@@ -3,7 +3,6 @@
 // time. GCC only calls libmvec under -ffast-math, so this file alone is built with it (CMakeLists);
 // it holds nothing but these loops, so no other arithmetic is affected.
 #include "steps.hpp"
-#include "batch_trig.hpp"
 
 #include <cmath>
 

@@ -1,12 +1,16 @@
 // Steps shared by the algorithms. Internal header.
 #pragma once
 
+#include <cstddef>
+
 #include "csp/dynamics/model.hpp"
 
 namespace csp::detail {
 
 // sin and cos of seven angles at once (vectorised, src/joint_trig.cpp).
 void joint_sin_cos(const Vector7& theta, Vector7& sin_theta, Vector7& cos_theta);
+// sin and cos of n angles, n a multiple of 4 (four per libmvec call; batch.cpp's blocks of states).
+void sin_cos_in_fours(const double* theta, double* sin_theta, double* cos_theta, std::ptrdiff_t n);
 
 // data.cos_theta, data.sin_theta of theta_i = q_i + theta_offset_i.
 inline void update_joint_angles(const Model& model, Data& data, const Vector7& q) {
