@@ -34,24 +34,13 @@ void add_inertia(Matrix6& I_A, const SpatialInertia& I) {
   I_A.bottomRightCorner<3, 3>() += I.rotational;
 }
 
-// detail::update_base_velocities with the steps above.
-void update_velocities(Data& data, const Vector7& dq) {
-  Vector6 v = Vector6::Zero();
-  for (int i = 0; i < kNumJoints; ++i) {
-    const Vector6 joint_velocity = data.axis[i] * dq[i];
-    v += joint_velocity;
-    data.velocity[i] = v;
-    data.bias_acceleration[i] = motion_cross_motion(v, joint_velocity);
-  }
-}
-
 // Articulated-body algorithm in base coordinates (Featherstone Table 7.1 with all quantities in
 // the base frame, so no inertia is ever transformed between links). f_ext may be null: no wrenches.
 void articulated_body(const Model& model, Data& data, const Vector7& q, const Vector7& dq, const Vector7& tau,
                       const LinkWrenches* f_ext) {
   detail::update_joint_frames(model, data, q);   // the flange, EE and K frames are not needed
   detail::update_base_inertias(model, data);
-  update_velocities(data, dq);
+  detail::update_base_velocities<motion_cross_motion>(data, dq);
 
   // Pass 1: velocity-product forces v x* I v, less the external wrenches.
   std::array<Vector6, kNumJoints> p;

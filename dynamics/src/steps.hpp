@@ -32,13 +32,15 @@ inline void update_base_inertias(const Model& model, Data& data) {
 
 // After update_joint_frames: body velocities v_i = v_{i-1} + S_i dq_i and the velocity-product
 // accelerations c_i = v_i x S_i dq_i (in base coordinates dS_i/dt = v_i x S_i, Featherstone sec. 2.12).
+// `cross` is the motion cross product v x m (aba passes its own form, src/forward_dynamics.cpp).
+template <Vector6 (*cross)(const Vector6&, const Vector6&) = cross_motion>
 inline void update_base_velocities(Data& data, const Vector7& dq) {
   Vector6 v = Vector6::Zero();
   for (int i = 0; i < kNumJoints; ++i) {
     const Vector6 joint_velocity = data.axis[i] * dq[i];
     v += joint_velocity;
     data.velocity[i] = v;
-    data.bias_acceleration[i] = cross_motion(v, joint_velocity);
+    data.bias_acceleration[i] = cross(v, joint_velocity);
   }
 }
 
